@@ -1,0 +1,64 @@
+"""attitude: rotation-state analysis of spacecraft and small bodies.
+
+Mass properties in, time-tagged attitude ephemerides out::
+
+    import attitude as att
+    body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    state = att.AttitudeState(epoch, attitude, omega_body)
+    eph = att.propagate(body, state, times)
+    eph.to_netcdf("out.nc")
+
+See ``API.md``-level names in ``__all__``.
+"""
+
+from __future__ import annotations
+
+from . import _units  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
+from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
+from .ephemeris import Ephemeris
+from .errors import (
+    AttitudeError,
+    AttitudeWarning,
+    EphemerisFormatError,
+    InvalidInertiaError,
+    InvalidStateError,
+    NearSeparatrixWarning,
+    PropagationError,
+    ScenarioError,
+    ShapeModelError,
+)
+from .propagate import propagate
+from .state import INERTIAL_FRAMES, AttitudeState
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "__version__",
+    "RigidBody",
+    "MassProperties",
+    "AttitudeState",
+    "Ephemeris",
+    "propagate",
+    "diagnose",
+    "INERTIAL_FRAMES",
+    "SYMMETRY_RTOL",
+    "TRIANGLE_RTOL",
+    "AttitudeError",
+    "InvalidInertiaError",
+    "InvalidStateError",
+    "ShapeModelError",
+    "ScenarioError",
+    "PropagationError",
+    "EphemerisFormatError",
+    "AttitudeWarning",
+    "NearSeparatrixWarning",
+]
+
+
+def __getattr__(name):
+    # The exact torque-free module is imported on first use (it pulls in scipy.special).
+    if name == "diagnose":
+        from .torquefree import diagnose
+
+        return diagnose
+    raise AttributeError(f"module 'attitude' has no attribute {name!r}")

@@ -1,0 +1,137 @@
+"""The ``attitude`` command.
+
+Exit codes: 0 success, 1 an expectation failed, 2 bad input (malformed or non-physical
+scenario, unreadable file), 3 the propagation itself failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from . import __version__
+from .errors import AttitudeError, PropagationError
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_EXPECTATION, EXIT_INPUT, EXIT_PROPAGATION = 0, 1, 2, 3
+
+_RUN_HELP = """\
+Propagate the scenario, print a summary and write its outputs.
+
+The scenario file (TOML) names a body, an initial state, a duration and an output step;
+see docs/scenarios.md.  For example:
+
+  attitude run scenarios/apophis.toml
+  attitude run scenarios/apophis.toml -o /tmp/apophis.nc --report /tmp/apophis.json
+
+The netCDF ephemeris goes to [output].netcdf (relative to the scenario file), or to -o.
+"""
+
+_MAIN_HELP = """\
+Rotation-state analysis of spacecraft and small bodies.
+
+  attitude run scenarios/apophis.toml      propagate a scenario, print a summary,
+                                           write the netCDF ephemeris
+  attitude run FILE.toml --report R.json   also write a JSON report
+
+Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed.
+"""
+
+
+def _format_seconds(s: float) -> str:
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if abs(s) >= 2 * size:
+            return f"{s / size:.10g} {unit}"
+    return f"{s:.10g} s"
+
+
+def _summary(result) -> str:
+    sc, eph, d = result.scenario, result.ephemeris, result.diagnosis
+    body, state = sc.body, sc.state
+    A, B, C = body.principal_moments
+    w = state.omega_body
+    wn = math.degrees(float((w @ w) ** 0.5))
+    lines = [
+        f"Scenario   {sc.name}  ({sc.path})",
+        f"Body       A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 ({body.symmetry})"
+        + (f", mass {body.mass:.6g} kg" if body.mass is not None else ""),
+        f"State      epoch {state.epoch.isot} {state.epoch.scale.upper()}, frame {state.frame},"
+        f" |omega| = {wn:.6g} deg/s",
+        f"Run        {len(eph)} epochs over {_format_seconds(sc.duration)}, step "
+        f"{_format_seconds(sc.step)}, method {sc.method or 'exact'}",
+    ]
+    if d is not None:
+        periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in d.periods.items())
+        lines.append(f"Motion     regime {d.regime}" + (f"; periods: {periods}" if periods else ""))
+    c = result.conservation
+    lines.append(f"Conserved  |L| = {d.angular_momentum:.10g} kg m^2/s (max rel. drift "
+                 f"{c['angular_momentum_rel_drift']:.2g}), E = {d.kinetic_energy:.10g} J "
+                 f"(max rel. drift {c['energy_rel_drift']:.2g})")
+    for e in result.expectations:
+        status = "ok  " if e["ok"] else "FAIL"
+        tol = f" +/- {e['tolerance']:.3g}" if "tolerance" in e else ""
+        unit = f" {e['unit']}" if "unit" in e else ""
+        lines.append(f"Expect     {status} {e['key']}: expected {e['expected']}{tol}{unit}, "
+                     f"got {e['got']}")
+    for p in result.outputs:
+        lines.append(f"Wrote      {p}")
+    return "\n".join(lines)
+
+
+def _cmd_run(args) -> int:
+    from .scenario import load_scenario, run_scenario
+
+    scenario = load_scenario(args.scenario)
+    result = run_scenario(scenario, netcdf=args.output)
+    if args.report:
+        from .ephemeris import write_atomically
+
+        report = json.dumps(result.report(), indent=2, default=float)
+        write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(report + "\n"))
+    if not args.quiet:
+        print(_summary(result))
+    return EXIT_OK if result.ok else EXIT_EXPECTATION
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="attitude", description=_MAIN_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"attitude {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    run = sub.add_parser("run", help="propagate a scenario file", description=_RUN_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    run.add_argument("scenario", metavar="SCENARIO.toml", help="scenario file")
+    run.add_argument("-o", "--output", metavar="OUT.nc",
+                     help="netCDF ephemeris path (overrides [output].netcdf)")
+    run.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
+    run.add_argument("--quiet", action="store_true", help="print nothing on success")
+    run.set_defaults(func=_cmd_run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return EXIT_INPUT
+    try:
+        return args.func(args)
+    except PropagationError as exc:
+        print(f"attitude: error: {exc}", file=sys.stderr)
+        return EXIT_PROPAGATION
+    except AttitudeError as exc:
+        print(f"attitude: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except OSError as exc:
+        print(f"attitude: error: {exc.filename or ''}: {exc.strerror}", file=sys.stderr)
+        return EXIT_INPUT
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,311 @@
+"""Time-tagged attitude ephemerides: an ``xarray.Dataset`` with a fixed schema.
+
+Schema (see API.md):
+
+========================  ===========================================  ==================
+variable                  dims                                         meaning
+========================  ===========================================  ==================
+``time`` (coordinate)     time                                         s since ``epoch``
+``quaternion``            [body,] time, quaternion_component (x y z w)  body -> inertial
+``angular_velocity``      [body,] time, axis (x y z)                   body frame, rad/s
+``angular_momentum``      [body,] time, axis                           inertial, kg m^2/s
+``kinetic_energy``        [body,] time                                 J
+========================  ===========================================  ==================
+
+Global attributes: ``epoch`` (ISO 8601), ``time_scale``, ``frame``, ``inertia`` (9 floats,
+row-major, body frame), ``principal_moments``, ``quaternion_convention``,
+``Conventions``, ``title``, ``history``, ``source``.  A batch (leading ``body``
+dimension) carries ``inertia`` and ``principal_moments`` as per-body variables instead.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from datetime import UTC, datetime
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from astropy.time import Time, TimeDelta
+from scipy.spatial.transform import Rotation
+
+from . import _quat
+from .body import RigidBody
+from .errors import EphemerisFormatError
+
+__all__ = ["Ephemeris", "QUATERNION_CONVENTION"]
+
+QUATERNION_CONVENTION = "scalar-last, body-to-inertial"
+_REQUIRED_VARIABLES = ("quaternion", "angular_velocity")
+_REQUIRED_ATTRS = ("epoch", "time_scale", "frame")
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+class Ephemeris:
+    """An attitude ephemeris: a thin, validated wrapper around an ``xarray.Dataset``.
+
+    Build one with :func:`attitude.propagate`, :meth:`from_arrays` or
+    :meth:`from_netcdf`; the data live in :attr:`dataset`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> state = att.AttitudeState("2030-01-01T00:00:00", Rotation.identity(), [0, 0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 60.0, 7))
+    >>> eph.dataset.quaternion.dims
+    ('time', 'quaternion_component')
+    >>> print(eph.times[-1].isot, eph.time_scale)
+    2030-01-01T00:01:00.000 TDB
+    """
+
+    def __init__(self, dataset: xr.Dataset):
+        if not isinstance(dataset, xr.Dataset):
+            raise EphemerisFormatError(
+                f"expected an xarray.Dataset, got {type(dataset).__name__}")
+        missing = [v for v in _REQUIRED_VARIABLES if v not in dataset.variables]
+        missing += [f"attribute {a}" for a in _REQUIRED_ATTRS if a not in dataset.attrs]
+        if "time" not in dataset.coords:
+            missing.insert(0, "time coordinate")
+        if missing:
+            raise EphemerisFormatError(
+                f"not an attitude ephemeris: missing {', '.join(missing)} (see the "
+                "ephemeris schema in the docs)")
+        if dataset.quaternion.sizes.get("quaternion_component") != 4:
+            raise EphemerisFormatError("quaternion: expected a quaternion_component "
+                                       "dimension of size 4 (x, y, z, w)")
+        self._dataset = dataset
+
+    # --- construction -----------------------------------------------------------
+    @classmethod
+    def from_arrays(cls, time, quaternion, angular_velocity, *, body, epoch: Time,
+                    frame: str, title: str = "attitude ephemeris", source: str = "",
+                    extra_attrs: dict | None = None) -> Ephemeris:
+        """Build the dataset from arrays.
+
+        Parameters
+        ----------
+        time : (T,) array
+            Seconds since ``epoch``.
+        quaternion : ([N,] T, 4) array
+            Body -> inertial, scalar-last.
+        angular_velocity : ([N,] T, 3) array
+            Body-frame rates, rad/s.
+        body : RigidBody, or a sequence of N bodies for a batch
+        epoch : astropy Time
+        frame : str
+            Inertial frame label.
+        """
+        time = np.asarray(time, dtype=float)
+        q = _quat.canonical(np.asarray(quaternion, dtype=float))
+        w = np.asarray(angular_velocity, dtype=float)
+        batch = not isinstance(body, RigidBody)
+        bodies = list(body) if batch else [body]
+        inertia = np.stack([b.inertia for b in bodies])           # (N, 3, 3)
+        if batch:
+            inertia_t = inertia[:, None]                           # (N, 1, 3, 3)
+        else:
+            inertia_t = inertia[0]
+        Lb = np.einsum("...ij,...j->...i", inertia_t, w)
+        L = _quat.rotate(q, Lb)
+        E = 0.5 * np.sum(w * Lb, axis=-1)
+
+        lead = ("body", "time") if batch else ("time",)
+        now = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+        attrs = {
+            "title": title,
+            "epoch": _isot9(epoch),
+            "time_scale": epoch.scale.upper(),
+            "frame": frame,
+            "quaternion_convention": QUATERNION_CONVENTION,
+            "Conventions": "CF-1.10",
+            "history": f"{now} created by attitude {_version()}",
+            "source": source or f"attitude {_version()}",
+        }
+        if not batch:
+            attrs["inertia"] = inertia[0].ravel()
+            attrs["principal_moments"] = bodies[0].principal_moments.copy()
+            if bodies[0].name:
+                attrs["body_name"] = bodies[0].name
+            if bodies[0].mass is not None:
+                attrs["mass"] = bodies[0].mass
+        attrs.update(extra_attrs or {})
+        ds = xr.Dataset(
+            {
+                "quaternion": (lead + ("quaternion_component",), q, {
+                    "long_name": "attitude quaternion, body frame to inertial frame",
+                    "units": "1", "convention": QUATERNION_CONVENTION}),
+                "angular_velocity": (lead + ("axis",), w, {
+                    "long_name": "angular velocity in body-frame components",
+                    "units": "rad s-1"}),
+                "angular_momentum": (lead + ("axis",), L, {
+                    "long_name": "angular momentum in inertial-frame components",
+                    "units": "kg m2 s-1"}),
+                "kinetic_energy": (lead, E, {
+                    "long_name": "rotational kinetic energy", "units": "J"}),
+            },
+            coords={
+                "time": ("time", time, {"units": "s", "long_name": "time since epoch",
+                                        "axis": "T"}),
+                "quaternion_component": ("quaternion_component", ["x", "y", "z", "w"]),
+                "axis": ("axis", ["x", "y", "z"]),
+            },
+            attrs=attrs,
+        )
+        if batch:
+            ds["inertia"] = (("body", "inertia_component"), inertia.reshape(-1, 9), {
+                "long_name": "inertia tensor in the body frame, row-major",
+                "units": "kg m2"})
+            ds["principal_moments"] = (("body", "moment"), np.stack(
+                [b.principal_moments for b in bodies]), {
+                "long_name": "principal moments of inertia A <= B <= C", "units": "kg m2"})
+            ds = ds.assign_coords(body=("body", np.arange(len(bodies))),
+                                  body_name=("body", [b.name for b in bodies]))
+        return cls(ds)
+
+    # --- views ---------------------------------------------------------------------
+    @property
+    def dataset(self) -> xr.Dataset:
+        """The ephemeris as an ``xarray.Dataset`` (schema in the module docstring)."""
+        return self._dataset
+
+    @property
+    def time(self) -> np.ndarray:
+        """Seconds since :attr:`epoch`, float64."""
+        return self._dataset["time"].values
+
+    @property
+    def epoch(self) -> Time:
+        """Reference epoch of the ``time`` coordinate."""
+        return Time(self._dataset.attrs["epoch"], scale=self.time_scale.lower(), precision=9)
+
+    @property
+    def time_scale(self) -> str:
+        return str(self._dataset.attrs["time_scale"]).upper()
+
+    @property
+    def times(self) -> Time:
+        """Epochs of the samples as an astropy ``Time`` array (two-double precision)."""
+        return self.epoch + TimeDelta(self.time, format="sec")
+
+    @property
+    def frame(self) -> str:
+        return str(self._dataset.attrs["frame"])
+
+    @property
+    def is_batch(self) -> bool:
+        return "body" in self._dataset.quaternion.dims
+
+    @property
+    def rotation(self) -> Rotation:
+        """Body -> inertial rotations, a scipy ``Rotation`` of shape ``([N,] T)``."""
+        return Rotation.from_quat(self._dataset.quaternion.values)
+
+    @property
+    def body(self) -> RigidBody:
+        """The body of a single-body ephemeris, rebuilt from the ``inertia`` attribute."""
+        ds = self._dataset
+        if self.is_batch:
+            raise EphemerisFormatError("a batch ephemeris has one body per index: use "
+                                       "ephemeris.bodies")
+        if "inertia" not in ds.attrs:
+            raise EphemerisFormatError("attribute inertia (9 floats, kg m^2) is missing; "
+                                       "the body is needed for this quantity")
+        return RigidBody(np.asarray(ds.attrs["inertia"], dtype=float).reshape(3, 3),
+                         mass=ds.attrs.get("mass"), name=str(ds.attrs.get("body_name", "")))
+
+    @property
+    def bodies(self) -> list[RigidBody]:
+        """The bodies of the ephemeris (one for a single-body ephemeris)."""
+        if not self.is_batch:
+            return [self.body]
+        ds = self._dataset
+        names = ds["body_name"].values if "body_name" in ds.coords else [""] * ds.sizes["body"]
+        return [RigidBody(np.asarray(i, dtype=float).reshape(3, 3), name=str(n))
+                for i, n in zip(ds["inertia"].values, names)]
+
+    def conservation(self) -> dict[str, float]:
+        """Largest relative drift of the inertial angular-momentum vector and of the
+        kinetic energy from their first sample: ``max |L(t) - L(0)| / |L(0)|`` and
+        ``max |E(t) - E(0)| / E(0)`` (0 for a body at rest)."""
+        L = self._dataset.angular_momentum.values
+        E = self._dataset.kinetic_energy.values
+        L0, E0 = L[..., :1, :], E[..., :1]
+        dL = np.linalg.norm(L - L0, axis=-1).max(axis=-1)
+        nL = np.linalg.norm(L0, axis=-1)[..., 0]
+        dE = np.abs(E - E0).max(axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rl = np.where(nL > 0, dL / np.where(nL > 0, nL, 1), 0.0)
+            re = np.where(E0[..., 0] > 0, dE / np.where(E0[..., 0] > 0, E0[..., 0], 1), 0.0)
+        return {"angular_momentum_rel_drift": float(np.max(rl)),
+                "energy_rel_drift": float(np.max(re))}
+
+    def __len__(self) -> int:
+        return self._dataset.sizes["time"]
+
+    def __repr__(self) -> str:
+        n = len(self)
+        span = f"{self.time[0]:.6g} .. {self.time[-1]:.6g} s" if n else "empty"
+        nb = f"{self._dataset.sizes['body']} bodies, " if self.is_batch else ""
+        return (f"<Ephemeris {nb}{n} epochs, {span} since {self._dataset.attrs['epoch']} "
+                f"{self.time_scale}, frame {self.frame}>")
+
+    # --- files ---------------------------------------------------------------------
+    def to_netcdf(self, path: str | PathLike) -> Path:
+        """Write a netCDF-4 file atomically (temporary file in the same folder, then
+        rename): a crash never leaves a truncated ephemeris.  Returns the path."""
+        path = Path(path)
+        encoding = {name: {"_FillValue": None, "zlib": True, "complevel": 4}
+                    for name, var in self._dataset.variables.items()
+                    if var.dtype.kind == "f"}
+        return write_atomically(path, lambda tmp: self._dataset.to_netcdf(
+            tmp, engine="netcdf4", format="NETCDF4", encoding=encoding))
+
+    @classmethod
+    def from_netcdf(cls, path: str | PathLike) -> Ephemeris:
+        """Read an ephemeris written by :meth:`to_netcdf` (or any file with the schema)."""
+        path = Path(path)
+        if not path.is_file():
+            raise EphemerisFormatError(f"{path}: no such file")
+        try:
+            with xr.open_dataset(path, engine="netcdf4", decode_times=False,
+                                 decode_timedelta=False) as ds:
+                ds = ds.load()
+        except (OSError, ValueError) as exc:
+            raise EphemerisFormatError(f"{path}: not a readable netCDF file ({exc})") from None
+        for name in ("quaternion_component", "axis", "body_name"):
+            if name in ds.coords and ds[name].dtype == object:
+                ds = ds.assign_coords({name: ds[name].astype(str)})
+        return cls(ds)
+
+
+def write_atomically(path: Path, write) -> Path:
+    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _isot9(epoch: Time) -> str:
+    t = epoch.copy()
+    t.precision = 9
+    return t.isot

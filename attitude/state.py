@@ -1,0 +1,185 @@
+"""The rotational state of a rigid body at an epoch.
+
+An :class:`AttitudeState` holds an epoch (astropy ``Time`` with an explicit scale), the
+attitude as a scipy ``Rotation`` mapping body-frame vectors into the inertial frame
+(``v_inertial = attitude.apply(v_body)``), the body-frame angular velocity in rad/s,
+and the label of the inertial frame.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+from dataclasses import dataclass
+
+import numpy as np
+from astropy.time import Time
+from scipy.spatial.transform import Rotation
+
+from ._units import to_si
+from .body import RigidBody
+from .errors import InvalidStateError
+
+__all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL"]
+
+#: Inertial frame labels accepted (case-insensitive).  No frame conversion is ever done:
+#: the label travels with the data.  ``INERTIAL`` is a generic label for synthetic studies.
+INERTIAL_FRAMES = (
+    "ICRF", "GCRF", "EME2000", "J2000", "ECLIPJ2000", "ECLIPTIC_J2000", "MOD", "TOD",
+    "TEME", "SATURN_EQUATORIAL", "INERTIAL",
+)
+
+#: Time scale of an epoch given as a plain string (dynamics are best done in TDB).
+DEFAULT_TIME_SCALE = "tdb"
+
+#: A quaternion given by the user must have a norm within this of 1.
+QUATERNION_NORM_TOL = 1e-6
+
+
+def check_frame(frame: str, *, error=InvalidStateError) -> str:
+    """Return the canonical upper-case label, or raise naming the closest known one."""
+    if not isinstance(frame, str):
+        raise error(f"frame: expected a string label such as 'ICRF', got {frame!r}")
+    label = frame.strip().upper()
+    if label not in INERTIAL_FRAMES:
+        near = difflib.get_close_matches(label, INERTIAL_FRAMES, n=1)
+        hint = f"did you mean {near[0]!r}? " if near else ""
+        raise error(f"frame {frame!r} is not a known inertial frame; {hint}"
+                    f"use one of {', '.join(INERTIAL_FRAMES)}")
+    return label
+
+
+def as_epoch(epoch, *, error=InvalidStateError) -> Time:
+    """A scalar astropy Time; strings are parsed in :data:`DEFAULT_TIME_SCALE`."""
+    if isinstance(epoch, str):
+        try:
+            epoch = Time(epoch, scale=DEFAULT_TIME_SCALE)
+        except ValueError as exc:
+            raise error(f"epoch: cannot parse {epoch!r} as a time ({exc}); use ISO 8601 "
+                        "such as '2029-04-13T00:00:00'") from None
+    if not isinstance(epoch, Time):
+        raise error(f"epoch: expected an astropy Time or an ISO 8601 string, got {epoch!r}")
+    if not epoch.isscalar:
+        raise error(f"epoch: expected a single time, got an array of shape {epoch.shape}")
+    return epoch
+
+
+def as_omega(omega, *, name: str = "omega_body", error=InvalidStateError) -> np.ndarray:
+    """Angular velocity in rad/s from floats (rad/s), a Quantity or a string."""
+    w = np.asarray(to_si(omega, "rad/s", name=name, error=error), dtype=float)
+    if w.shape != (3,):
+        raise error(f"{name}: expected 3 components, got shape {w.shape}")
+    if not np.all(np.isfinite(w)):
+        raise error(f"{name} = {w.tolist()} rad/s: every component must be finite "
+                    "(NaN or inf rates cannot be propagated)")
+    return w
+
+
+@dataclass(frozen=True, eq=False)
+class AttitudeState:
+    """Epoch, attitude and body rates of a rigid body.
+
+    Parameters
+    ----------
+    epoch : astropy Time or str
+        A single epoch; strings are read as ISO 8601 in TDB.
+    attitude : scipy Rotation
+        Body -> inertial: ``v_inertial = attitude.apply(v_body)``.
+    omega_body : (3,) array-like or Quantity
+        Angular velocity in body-frame components; plain numbers are rad/s.
+    frame : str
+        Label of the inertial frame (:data:`INERTIAL_FRAMES`), default ``"ICRF"``.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude import AttitudeState, RigidBody
+    >>> state = AttitudeState(epoch="2029-04-13T00:00:00", attitude=Rotation.identity(),
+    ...                       omega_body=[0.0, 0.0, 360.0] * u.deg / u.day)
+    >>> state.epoch.scale, state.frame
+    ('tdb', 'ICRF')
+    >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> float(state.kinetic_energy(body))  # 1/2 C w^2
+    7.93...e-10
+    """
+
+    epoch: Time
+    attitude: Rotation
+    omega_body: np.ndarray
+    frame: str = "ICRF"
+
+    def __post_init__(self):
+        object.__setattr__(self, "epoch", as_epoch(self.epoch))
+        if not isinstance(self.attitude, Rotation) or not self.attitude.single:
+            raise InvalidStateError(
+                "attitude: expected a single scipy Rotation (body -> inertial), got "
+                f"{type(self.attitude).__name__}; build one with "
+                "AttitudeState.from_quaternion or Rotation.from_quat")
+        w = as_omega(self.omega_body)
+        w.flags.writeable = False
+        object.__setattr__(self, "omega_body", w)
+        object.__setattr__(self, "frame", check_frame(self.frame))
+
+    # --- constructors ---------------------------------------------------------
+    @classmethod
+    def from_quaternion(cls, quaternion, *, scalar_first: bool = False, epoch,
+                        omega_body, frame: str = "ICRF") -> AttitudeState:
+        """From a body -> inertial quaternion, scalar-last ``(x, y, z, w)`` unless
+        ``scalar_first=True``.  Its norm must be 1 within :data:`QUATERNION_NORM_TOL`."""
+        q = np.asarray(quaternion, dtype=float)
+        if q.shape != (4,) or not np.all(np.isfinite(q)):
+            raise InvalidStateError(f"quaternion: expected 4 finite components, got {q!r}")
+        norm = np.linalg.norm(q)
+        if abs(norm - 1.0) > QUATERNION_NORM_TOL:
+            raise InvalidStateError(
+                f"quaternion {q.tolist()} has norm {norm:.9g}, not 1; normalise it, and "
+                f"check the component order (scalar_first={scalar_first})")
+        return cls(epoch, Rotation.from_quat(q, scalar_first=scalar_first), omega_body, frame)
+
+    @classmethod
+    def from_euler(cls, seq: str, angles, *, degrees: bool = False, epoch, omega_body,
+                   frame: str = "ICRF") -> AttitudeState:
+        """From Euler angles of the body -> inertial rotation in any scipy sequence
+        (``"ZXZ"`` intrinsic, ``"zxz"`` extrinsic, ...).  ``angles`` may be a Quantity."""
+        if hasattr(angles, "unit") or isinstance(angles, str):
+            angles, degrees = to_si(angles, "rad", name="angles", error=InvalidStateError), False
+        try:
+            rot = Rotation.from_euler(seq, np.asarray(angles, dtype=float), degrees=degrees)
+        except ValueError as exc:
+            raise InvalidStateError(f"euler: {exc}") from None
+        return cls(epoch, rot, omega_body, frame)
+
+    def replace(self, **changes) -> AttitudeState:
+        """A copy with some fields changed."""
+        return dataclasses.replace(self, **changes)
+
+    # --- derived quantities -----------------------------------------------------
+    def angular_momentum_body(self, body: RigidBody) -> np.ndarray:
+        """``L = I omega`` in body-frame components, kg m^2/s."""
+        return body.inertia @ self.omega_body
+
+    def angular_momentum(self, body: RigidBody) -> np.ndarray:
+        """Angular momentum in inertial-frame components, kg m^2/s."""
+        return self.attitude.apply(self.angular_momentum_body(body))
+
+    def kinetic_energy(self, body: RigidBody) -> float:
+        """Rotational kinetic energy ``omega . I omega / 2``, J."""
+        return 0.5 * float(self.omega_body @ body.inertia @ self.omega_body)
+
+    def dynamic_inertia(self, body: RigidBody) -> float:
+        """``L^2 / 2E`` (kg m^2), between A and C; NaN for a body at rest."""
+        e2 = 2.0 * self.kinetic_energy(body)
+        L = self.angular_momentum_body(body)
+        return float(L @ L / e2) if e2 > 0 else float("nan")
+
+    def omega_principal(self, body: RigidBody) -> np.ndarray:
+        """Angular velocity in the principal frame of ``body``, rad/s."""
+        return body.body_to_principal.apply(self.omega_body)
+
+    def __repr__(self) -> str:
+        q = self.attitude.as_quat()
+        return (f"AttitudeState(epoch={self.epoch.isot} {self.epoch.scale.upper()}, "
+                f"quat_xyzw={np.array2string(q, precision=6)}, "
+                f"omega_body={np.array2string(self.omega_body, precision=6)} rad/s, "
+                f"frame={self.frame})")
