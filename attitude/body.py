@@ -55,10 +55,10 @@ TRIANGLE_RTOL = 1e-10
 SYMMETRIC_TENSOR_RTOL = 1e-10
 
 
-def _readonly(a) -> np.ndarray:
-    a = np.array(a, dtype=float)
-    a.flags.writeable = False
-    return a
+def _copy(a) -> np.ndarray:
+    # A private copy.  Not flagged read-only: scipy's Rotation.apply refuses read-only
+    # buffers, and users rotate these vectors all the time.
+    return np.array(a, dtype=float)
 
 
 def _vector(value, unit: str, name: str) -> np.ndarray:
@@ -148,8 +148,8 @@ class MassProperties:
                 f"inertia has a negative principal moment ({eig[0]!r} kg m^2); "
                 "the inertia of any mass distribution is positive semi-definite")
         object.__setattr__(self, "mass", mass)
-        object.__setattr__(self, "center_of_mass", _readonly(com))
-        object.__setattr__(self, "inertia", _readonly(inertia))
+        object.__setattr__(self, "center_of_mass", _copy(com))
+        object.__setattr__(self, "inertia", _copy(inertia))
 
     # --- composition -------------------------------------------------------------
     def placed(self, offset=(0.0, 0.0, 0.0), orientation: Rotation | None = None
@@ -396,13 +396,13 @@ class RigidBody:
                 f"principal moments A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 violate the "
                 f"triangle inequality A + B >= C (A + B = {A + B:.6g}); no mass distribution "
                 "has them: check the units and that the moments are about the centre of mass")
-        object.__setattr__(self, "inertia", _readonly(inertia))
-        object.__setattr__(self, "principal_moments", _readonly(moments))
-        object.__setattr__(self, "principal_axes", _readonly(axes))
+        object.__setattr__(self, "inertia", _copy(inertia))
+        object.__setattr__(self, "principal_moments", _copy(moments))
+        object.__setattr__(self, "principal_axes", _copy(axes))
         if self.mass is not None:
             object.__setattr__(self, "mass", _positive(self.mass, "kg", "mass"))
         object.__setattr__(self, "center_of_mass",
-                           _readonly(_vector(self.center_of_mass, "m", "center_of_mass")))
+                           _copy(_vector(self.center_of_mass, "m", "center_of_mass")))
 
     # --- constructors ---------------------------------------------------------
     @classmethod

@@ -65,7 +65,7 @@ class Ephemeris:
     >>> eph.dataset.quaternion.dims
     ('time', 'quaternion_component')
     >>> print(eph.times[-1].isot, eph.time_scale)
-    2030-01-01T00:01:00.000 TDB
+    2030-01-01T00:01:00.000000000 TDB
     """
 
     def __init__(self, dataset: xr.Dataset):

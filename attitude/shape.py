@@ -98,6 +98,7 @@ class Polyhedron:
         Enclosed volume, m^3.
     centroid : ndarray, shape (3,)
         Centre of volume (the centre of mass of the homogeneous solid), m.
+        A new, writeable array on every access.
 
     Raises
     ------
@@ -172,7 +173,7 @@ class Polyhedron:
     vertices: np.ndarray
     faces: np.ndarray
     volume: float = field(init=False)
-    centroid: np.ndarray = field(init=False)
+    _centroid: np.ndarray = field(init=False)
     _inertia_per_density: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -204,7 +205,7 @@ class Polyhedron:
         object.__setattr__(self, "vertices", _freeze(vertices))
         object.__setattr__(self, "faces", _freeze(faces))
         object.__setattr__(self, "volume", float(volume))
-        object.__setattr__(self, "centroid", _freeze(origin + offset))
+        object.__setattr__(self, "_centroid", _freeze(origin + offset))
         object.__setattr__(self, "_inertia_per_density", _freeze(inertia))
 
     # ------------------------------------------------------------------ constructors
@@ -296,11 +297,22 @@ class Polyhedron:
             ) from err
         try:
             vertices, faces = _parse_obj(data)
-            return cls(vertices * scale, faces)
         except ShapeModelError as err:
             raise ShapeModelError(f"{os.fspath(path)}: {err}") from None
+        try:
+            return cls(vertices * scale, faces)
+        except ShapeModelError as err:
+            raise ShapeModelError(
+                f"{os.fspath(path)}: {err} [vertex and face numbers are 0-based: OBJ vertex i "
+                "is vertex i - 1, and faces are the triangles after fan triangulation]"
+            ) from None
 
     # ------------------------------------------------------------------ mass properties
+    @property
+    def centroid(self) -> np.ndarray:
+        # A copy: scipy's ``Rotation.apply`` rejects read-only arrays.
+        return self._centroid.copy()
+
     def inertia_per_density(self) -> np.ndarray:
         """Inertia tensor about the centroid for unit density.
 
@@ -359,7 +371,7 @@ class Polyhedron:
         (200.0, array([0.25, 0.25, 0.25]))
         """
         rho = _density_si(density)
-        return rho * self.volume, self.centroid.copy(), rho * self._inertia_per_density
+        return rho * self.volume, self.centroid, rho * self._inertia_per_density
 
     def __repr__(self) -> str:
         return (
@@ -402,7 +414,10 @@ def _validated_arrays(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
         raise ShapeModelError(f"vertices must have shape (n, 3), got {vertices.shape}")
     if len(vertices) == 0:
         raise ShapeModelError("shape model has no vertices")
-    faces = np.array(faces)
+    try:
+        faces = np.array(faces)
+    except (TypeError, ValueError) as err:
+        raise ShapeModelError(f"faces must be an (f, 3) array of vertex indices: {err}") from None
     if faces.size == 0:
         raise ShapeModelError("shape model has no faces")
     if faces.ndim != 2 or faces.shape[1] != 3:
@@ -410,9 +425,11 @@ def _validated_arrays(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
             f"faces must have shape (f, 3) (triangles), got {faces.shape}; "
             "triangulate polygons first (Polyhedron.from_obj does this for OBJ files)"
         )
-    if not np.issubdtype(faces.dtype, np.integer):
-        if not (np.issubdtype(faces.dtype, np.floating) and np.all(np.mod(faces, 1) == 0)):
-            raise ShapeModelError(f"faces must be integer vertex indices, got dtype {faces.dtype}")
+    integral = np.issubdtype(faces.dtype, np.integer) or (
+        np.issubdtype(faces.dtype, np.floating) and np.all(np.mod(faces, 1) == 0)
+    )
+    if not integral:
+        raise ShapeModelError(f"faces must be integer vertex indices, got dtype {faces.dtype}")
     faces = faces.astype(np.int64)
 
     if not np.isfinite(vertices).all():
@@ -647,11 +664,12 @@ def _parse_obj(data: bytes) -> tuple[np.ndarray, np.ndarray]:
     bad = (index < 0) | (index >= limit)
     if bad.any():
         t = int(np.flatnonzero(bad)[0])
+        available = int(np.broadcast_to(limit, raw.shape)[t])
         raise ShapeModelError(
             f"{_count(bad.sum(), 'face vertex index', 'face vertex indices')} {_be(bad.sum())} "
             f"out of range (first: index {raw[t]} on "
-            f"line {_line_number(data, _F_LINE, int(polygon[t]))}, but "
-            f"{int(np.broadcast_to(limit, raw.shape)[t])} vertices are defined); "
+            f"line {_line_number(data, _F_LINE, int(polygon[t]))}, where "
+            f"{_count(available, 'vertex', 'vertices')} {_be(available)} defined); "
             "OBJ indices are 1-based, or negative counting back from the last vertex"
         )
 

@@ -66,7 +66,7 @@ def as_epoch(epoch, *, error=InvalidStateError) -> Time:
 
 def as_omega(omega, *, name: str = "omega_body", error=InvalidStateError) -> np.ndarray:
     """Angular velocity in rad/s from floats (rad/s), a Quantity or a string."""
-    w = np.asarray(to_si(omega, "rad/s", name=name, error=error), dtype=float)
+    w = np.array(to_si(omega, "rad/s", name=name, error=error), dtype=float)  # a copy
     if w.shape != (3,):
         raise error(f"{name}: expected 3 components, got shape {w.shape}")
     if not np.all(np.isfinite(w)):
@@ -116,9 +116,7 @@ class AttitudeState:
                 "attitude: expected a single scipy Rotation (body -> inertial), got "
                 f"{type(self.attitude).__name__}; build one with "
                 "AttitudeState.from_quaternion or Rotation.from_quat")
-        w = as_omega(self.omega_body)
-        w.flags.writeable = False
-        object.__setattr__(self, "omega_body", w)
+        object.__setattr__(self, "omega_body", as_omega(self.omega_body))
         object.__setattr__(self, "frame", check_frame(self.frame))
 
     # --- constructors ---------------------------------------------------------
