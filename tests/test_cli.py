@@ -1,0 +1,66 @@
+"""The ``attitude`` command: exit codes, one-line errors, outputs (run as a real
+subprocess through the installed console script or ``python -m attitude``)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.test_scenario import GOOD, write
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def attitude(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "attitude", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+def test_run_prints_summary_and_writes_outputs(tmp_path):
+    path = write(tmp_path, GOOD)
+    out = tmp_path / "other.nc"
+    report = tmp_path / "r.json"
+    proc = attitude("run", path, "-o", out, "--report", report)
+    assert proc.returncode == 0, proc.stderr
+    assert "regime SAM" in proc.stdout and f"Wrote      {out}" in proc.stdout
+    assert out.is_file() and not (tmp_path / "out.nc").exists()
+    data = json.loads(report.read_text())
+    assert data["scenario"] == "test body" and data["outputs"] == [str(out)]
+
+
+@pytest.mark.parametrize("text", [
+    GOOD.replace("[1.0, 2.0, 3.0]", "[1.0, 1.0, 3.0]"),      # non-physical body
+    GOOD.replace('"10 s"', '"10 furlongs"'),                  # unparseable unit
+    GOOD.replace('step = "10 s"', ""),                        # missing key
+    GOOD.replace("[state]", "[state]\nspin = 3"),             # unknown key
+    "this is not toml",
+])
+def test_bad_scenarios_exit_2_with_one_line(tmp_path, text):
+    path = write(tmp_path, text)
+    proc = attitude("run", path)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and str(path) in lines[0], proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_failed_expectation_exits_1(tmp_path):
+    path = write(tmp_path, GOOD + '\n[expect]\nregime = "LAM"\n')
+    proc = attitude("run", path, "--quiet")
+    assert proc.returncode == 1
+    proc = attitude("run", tmp_path / "missing.toml")
+    assert proc.returncode == 2 and "no such file" in proc.stderr
+
+
+def test_help_teaches_with_an_example():
+    proc = attitude("run", "--help")
+    assert proc.returncode == 0 and "attitude run scenarios/" in proc.stdout
+
+
+def test_shipped_scenarios_run(tmp_path):
+    for path in sorted((ROOT / "scenarios").glob("*.toml")):
+        proc = attitude("run", path, "-o", tmp_path / (path.stem + ".nc"), "--quiet")
+        assert proc.returncode == 0, (path, proc.stderr)
