@@ -131,7 +131,7 @@ class MassProperties:
     >>> body.mass
     540.0
     >>> body.principal_moments.round(3)
-    array([ 90.   , 263.333, 308.333])
+    array([211.667, 276.667, 398.333])
     """
 
     mass: float

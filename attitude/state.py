@@ -101,7 +101,7 @@ class AttitudeState:
     ('tdb', 'ICRF')
     >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
     >>> float(state.kinetic_energy(body))  # 1/2 C w^2
-    7.93...e-10
+    7.93...e-09
     """
 
     epoch: Time

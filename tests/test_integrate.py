@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-from scipy.special import ellipk
 from scipy.spatial.transform import Rotation
+from scipy.special import ellipk
 
 import attitude as att
 from attitude.integrate import integrate_reference

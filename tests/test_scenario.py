@@ -94,7 +94,7 @@ def test_composite_body_and_euler_attitude(tmp_path):
     text = GOOD.replace("principal_moments = [1.0, 2.0, 3.0]", """parts = [
   { primitive = "box", mass = "500 kg", size = [1.0, 1.0, 2.0] },
   { primitive = "plate", mass = 20.0, size = [3.0, 1.0], offset = [2.0, 0.0, 0.0] },
-  { primitive = "plate", mass = 20.0, size = [3.0, 1.0], offset = { value = [-200.0, 0, 0], unit = "cm" } },
+  { primitive = "plate", mass = 20, size = [3, 1], offset = { value = [-200, 0, 0], unit = "cm" } },
 ]""").replace("{ quaternion_scalar_last = [0, 0, 0, 1] }",
               '{ euler = "ZXZ", angles = { value = [10.0, 40.0, -60.0], unit = "deg" } }')
     sc = load_scenario(write(tmp_path, text))
