@@ -122,3 +122,39 @@ energy_rel_drift = { max = 1e-13 }
     assert report["regime"] == "SAM"
     assert set(report["conservation"]) == {"angular_momentum_rel_drift", "energy_rel_drift"}
     assert report["expect"][0]["ok"] and report["expect"][1]["ok"]
+
+
+CUBE_OBJ = """\
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 2 3 7 6
+f 3 4 8 7
+f 4 1 5 8
+"""
+
+
+def test_shape_model_body_from_scenario(tmp_path):
+    """A 2 km x 2 km x 2 km cube of density 2 g/cm^3 (OBJ in units of 2 km):
+    m = 1.6e13 kg, I = m (2 a^2) / 12 with a = 2000 m."""
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
+    text = GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
+                        'shape = "cube.obj"\ndensity = "2 g/cm3"\nlength_unit = "2 km"')
+    sc = load_scenario(write(tmp_path, text))
+    m = 2000.0 * 2000.0**3
+    assert sc.body.mass == pytest.approx(m, rel=1e-14)
+    np.testing.assert_allclose(sc.body.principal_moments, m * 2 * 2000.0**2 / 12, rtol=1e-13)
+    np.testing.assert_allclose(sc.body.center_of_mass, 1000.0, rtol=1e-13)
+    with pytest.raises(att.ScenarioError, match="body.density: missing key"):
+        load_scenario(write(tmp_path, text.replace('density = "2 g/cm3"', "")))
+    (tmp_path / "open.obj").write_text(CUBE_OBJ.rsplit("f", 1)[0])
+    with pytest.raises(att.ScenarioError, match="body.shape: .*not closed"):
+        load_scenario(write(tmp_path, text.replace("cube.obj", "open.obj")))
