@@ -34,7 +34,8 @@ def elapsed_seconds(times, epoch: Time) -> np.ndarray:
     two-double precision before rounding to float64).
     """
     if isinstance(times, Time):
-        t = (times - epoch).to_value(u.s)
+        # difference taken in the epoch's scale: seconds of TDB, not of TT, for a TDB epoch
+        t = (getattr(times, epoch.scale) - epoch).to_value(u.s)
     elif isinstance(times, u.Quantity):
         try:
             t = times.to_value(u.s)

@@ -1,0 +1,260 @@
+"""Private numerical kernels for the exact torque-free solution.
+
+Everything here is vectorised numpy; nothing loops over epochs or bodies in
+Python (the only loops run over a handful of Landen / AGM levels).
+
+Contents
+--------
+* error-free transformations and double-double helpers (Dekker 1971,
+  Knuth TAOCP vol. 2 §4.2.2) used to carry phases past the 53-bit limit and to
+  form the separatrix discriminant without cancellation;
+* the descending Landen (Gauss) transformation for Jacobi ``sn, cn, dn``
+  evaluated from the *complementary* parameter ``m1 = 1 - m``
+  (Abramowitz & Stegun 16.12.2-4, 16.13.1-3; DLMF 22.7.1-3);
+* Bulirsch's general complete elliptic integral ``cel`` (Bulirsch 1969,
+  Numer. Math. 13, 305; Numerical Recipes 2nd ed. §6.11), evaluated in
+  ``numpy.longdouble``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "LD",
+    "PI_LD",
+    "two_sum",
+    "fast_two_sum",
+    "split",
+    "two_prod",
+    "dd_mul_d",
+    "dd_mul_dd",
+    "dd_add",
+    "ld_to_dd",
+    "cody_waite3",
+    "landen_chain",
+    "k_from_chain",
+    "landen_sncndn",
+    "cel",
+]
+
+#: pi in extended precision
+PI_LD = np.longdouble("3.14159265358979323846264338327950288")
+
+#: extended precision used for per-body constants (80-bit on x86-64 Linux; on
+#: platforms where it is plain double the code still works, a few ulp less exact)
+LD = np.longdouble
+
+_SPLITTER = 134217729.0  # 2**27 + 1, Veltkamp splitting constant
+
+
+# --------------------------------------------------------------------------
+# error-free transformations (float64)
+# --------------------------------------------------------------------------
+def two_sum(a, b):
+    """``s + e == a + b`` exactly, ``s = fl(a + b)`` (Knuth)."""
+    s = a + b
+    bb = s - a
+    e = (a - (s - bb)) + (b - bb)
+    return s, e
+
+
+def fast_two_sum(a, b):
+    """``s + e == a + b`` exactly, valid for ``|a| >= |b|`` (Dekker)."""
+    s = a + b
+    e = b - (s - a)
+    return s, e
+
+
+def split(a):
+    """Veltkamp split ``a = hi + lo`` with ``hi`` holding 26 significant bits."""
+    c = _SPLITTER * a
+    hi = c - (c - a)
+    return hi, a - hi
+
+
+def two_prod(a, b, b_split=None):
+    """``p + e == a * b`` exactly (Dekker's product; no FMA in numpy)."""
+    p = a * b
+    ah, al = split(a)
+    bh, bl = split(b) if b_split is None else b_split
+    e = ((ah * bh - p) + ah * bl + al * bh) + al * bl
+    return p, e
+
+
+def dd_mul_d(x, b):
+    """double-double times double, relative error ~ 2 eps**2."""
+    p, e = two_prod(x[0], b)
+    e = e + x[1] * b
+    return fast_two_sum(p, e)
+
+
+def dd_mul_dd(x, y):
+    """double-double times double-double, relative error ~ 4 eps**2."""
+    p, e = two_prod(x[0], y[0])
+    e = e + (x[0] * y[1] + x[1] * y[0])
+    return fast_two_sum(p, e)
+
+
+def dd_add(x, y):
+    """double-double sum (Bailey's "sloppy" add; exact when no cancellation
+    of the low parts matters, always correct to ~eps**2 of the operands)."""
+    s, e = two_sum(x[0], y[0])
+    e = e + (x[1] + y[1])
+    return fast_two_sum(s, e)
+
+
+def ld_to_dd(x):
+    """Split a ``longdouble`` array into float64 ``(hi, lo)``."""
+    x = np.asarray(x, dtype=LD)
+    hi = x.astype(np.float64)
+    lo = (x - hi.astype(LD)).astype(np.float64)
+    return hi, lo
+
+
+def cody_waite3(x):
+    """Split ``x`` (longdouble) into float64 ``c1 + c2 + c3`` where ``c1`` and
+    ``c2`` carry at most 27 significant bits, so that ``j * c1`` and ``j * c2``
+    are exact for integers ``|j| < 2**26`` (Cody & Waite 1980 argument
+    reduction)."""
+    hi, lo = ld_to_dd(x)
+    c1, c2 = split(hi)
+    return c1, c2, lo
+
+
+# --------------------------------------------------------------------------
+# Jacobi elliptic functions by descending Landen transformation, from m1
+# --------------------------------------------------------------------------
+#: the chain stops when the base parameter mu drops below this; the first-order
+#: small-parameter expansion (A&S 16.13) then errs by O(mu**2) < 1e-20
+MU_BASE_MAX = 1e-10
+
+
+def landen_chain(m, m1):
+    """Descending Landen chain from the parameter ``m`` and its complement ``m1``.
+
+    Both ``m`` and ``m1 = 1 - m`` are passed (each computed without
+    cancellation by the caller), so ``k' = sqrt(m1)`` keeps full relative
+    precision however close ``m`` is to 1 (the separatrix).
+
+    Parameters
+    ----------
+    m, m1 : array_like of longdouble, shape (n,)
+
+    Returns
+    -------
+    g : ndarray (levels, n) float64
+        ``sqrt(mu_{i+1}) = (1 - k'_i) / (1 + k'_i)`` for each level.
+    omg : ndarray (levels, n) float64
+        ``1 - g`` formed without cancellation, ``2 k'_i / (1 + k'_i)``.
+    scale : ndarray (n,) longdouble
+        ``prod(1 + g_i)``; ``K(m) = scale * K(mu_base)`` (A&S 17.5.x).
+    mu : ndarray (n,) longdouble
+        Base parameter ``mu_base`` (``< MU_BASE_MAX``).
+    """
+    m = np.asarray(m, dtype=LD)
+    m1 = np.asarray(m1, dtype=LD)
+    kp = np.sqrt(m1)
+    omk = m / (1 + kp)  # 1 - k', no cancellation
+    gs, omgs = [], []
+    scale = np.ones_like(kp)
+    while True:
+        g = omk / (1 + kp)
+        omg = 2 * kp / (1 + kp)
+        gs.append(g)
+        omgs.append(omg)
+        scale = scale * (1 + g)
+        mu = g * g
+        if not np.any(mu >= MU_BASE_MAX) or len(gs) > 40:
+            break
+        sq = np.sqrt(kp)
+        omk = (omk / (1 + sq)) ** 2 / (1 + kp)  # 1 - k'_{i+1} = (1 - sqrt k')^2/(1+k')
+        kp = 2 * sq / (1 + kp)  # k'_{i+1}
+    g = np.array(gs, dtype=LD)
+    omg = np.array(omgs, dtype=LD)
+    return g.astype(np.float64), omg.astype(np.float64), scale, mu
+
+
+def k_from_chain(scale, mu):
+    """Complete integral ``K(m) = scale * K(mu)``, ``K(mu)`` from its series
+    (A&S 17.3.11) to O(mu**3)."""
+    return scale * (PI_LD / 2) * (1 + mu / 4 + 9 * mu * mu / 64)
+
+
+def landen_sncndn(x, g, omg, inv_scale, mu):
+    """``sn, cn, dn (x | m)`` for ``0 <= x <= K/2`` by descending Landen.
+
+    ``x`` and the per-body constants broadcast together; ``g`` and ``omg`` have
+    a leading level axis.  On ``[0, K/2]`` every returned function is bounded
+    away from 0 in the relative sense needed (``dn >= m1**(1/4)``), and each
+    level is evaluated without cancellation::
+
+        D  = 1 + g s^2
+        sn = (1 + g) s / D
+        cn = c d / D
+        dn = ((1 - g) + g c^2) / D      # = (1 - g s^2)/D, A&S 16.12.4 rearranged
+
+    where ``s, c, d`` are the functions of the next (smaller) parameter at
+    argument ``x / prod(1 + g)``; the base level uses A&S 16.13.1-3.
+    """
+    v = x * inv_scale
+    s0 = np.sin(v)
+    c0 = np.cos(v)
+    corr = (0.25 * mu) * (v - s0 * c0)
+    s = s0 - corr * c0
+    c = c0 + corr * s0
+    d = 1.0 - (0.5 * mu) * (s0 * s0)
+    for lev in range(g.shape[0] - 1, -1, -1):
+        gl = g[lev]
+        inv_d = 1.0 / (1.0 + gl * (s * s))
+        s, c, d = ((1.0 + gl) * inv_d) * s, (c * d) * inv_d, (omg[lev] + gl * (c * c)) * inv_d
+    return s, c, d
+
+
+# --------------------------------------------------------------------------
+# Bulirsch's general complete elliptic integral
+# --------------------------------------------------------------------------
+def cel(kc, p, a, b):
+    r"""Bulirsch's ``cel(kc, p, a, b)`` for ``kc > 0, p > 0`` in longdouble.
+
+    .. math::
+        \mathrm{cel}(k_c,p,a,b) = \int_0^{\pi/2}
+        \frac{a\cos^2\theta + b\sin^2\theta}
+             {(\cos^2\theta + p\sin^2\theta)\sqrt{\cos^2\theta + k_c^2\sin^2\theta}}
+        \,d\theta
+
+    so ``K = cel(k', 1, 1, 1)`` and ``Pi(n|m) = cel(k', 1 - n, 1, 1)``.  The
+    complementary modulus enters directly, so nothing cancels near ``m = 1``;
+    convergence is quadratic (Bulirsch 1969; Numerical Recipes §6.11).
+    """
+    kc, p, a, b = np.broadcast_arrays(*(np.asarray(z, dtype=LD) for z in (kc, p, a, b)))
+    qc = np.abs(kc).copy()
+    a = a.copy()
+    p = np.sqrt(p)
+    b = b / p
+    e = qc.copy()
+    em = np.ones_like(qc)
+    done = np.zeros(qc.shape, dtype=bool)
+    ca = LD(1e-10) if np.finfo(LD).eps < 1e-17 else LD(1e-8)
+    for _ in range(60):
+        f = a
+        a_n = a + b / p
+        g = e / p
+        b_n = 2 * (b + f * g)
+        p_n = g + p
+        g = em
+        em_n = em + qc
+        conv = np.abs(g - qc) <= g * ca
+        upd = ~done
+        a = np.where(upd, a_n, a)
+        b = np.where(upd, b_n, b)
+        p = np.where(upd, p_n, p)
+        em = np.where(upd, em_n, em)
+        done = done | conv
+        if done.all():
+            break
+        qc_n = 2 * np.sqrt(e)
+        e_n = qc_n * em
+        qc = np.where(done, qc, qc_n)
+        e = np.where(done, e, e_n)
+    return (PI_LD / 2) * (b + a * em) / (em * (em + p))
