@@ -14,6 +14,7 @@ See ``API.md``-level names in ``__all__``.
 from __future__ import annotations
 
 from . import _units  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
+from . import torques  # noqa: F401  (att.torques.GravityGradient, ...)
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
 from .ephemeris import Ephemeris
 from .errors import (
@@ -27,6 +28,7 @@ from .errors import (
     ScenarioError,
     ShapeModelError,
 )
+from .orbit import KeplerOrbit
 from .propagate import propagate
 from .state import INERTIAL_FRAMES, AttitudeState
 
@@ -38,6 +40,8 @@ __all__ = [
     "MassProperties",
     "AttitudeState",
     "Ephemeris",
+    "KeplerOrbit",
+    "torques",
     "propagate",
     "diagnose",
     "INERTIAL_FRAMES",

@@ -49,6 +49,24 @@ def _format_seconds(s: float) -> str:
     return f"{s:.10g} s"
 
 
+def _number(x) -> str:
+    return f"{x:.10g}" if isinstance(x, float) else str(x)
+
+
+def _expectation_line(e: dict) -> str:
+    """``ok   precession: expected 27.38 +/- 0.0821 h, got 27.38``."""
+    status = "ok  " if e["ok"] else "FAIL"
+    unit = f" {e['unit']}" if "unit" in e else ""
+    if "tolerance" in e:
+        expected = f"{_number(e['expected'])} +/- {e['tolerance']:.3g}{unit}"
+    elif e["key"] == "regime":
+        expected = e["expected"]
+    else:
+        expected = f"<= {e['expected']:.3g}"
+    got = "absent" if e["got"] is None else _number(e["got"]) + unit
+    return f"{status} {e['key']}: expected {expected}, got {got}"
+
+
 def _summary(result) -> str:
     sc, eph, d = result.scenario, result.ephemeris, result.diagnosis
     body, state = sc.body, sc.state
@@ -66,17 +84,15 @@ def _summary(result) -> str:
     ]
     if d is not None:
         periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in d.periods.items())
-        lines.append(f"Motion     regime {d.regime}" + (f"; periods: {periods}" if periods else ""))
+        which = " (initial state, torque-free)" if sc.torques else ""
+        lines.append(f"Motion     regime{which} {d.regime}"
+                     + (f"; periods: {periods}" if periods else ""))
     c = result.conservation
     lines.append(f"Conserved  |L| = {d.angular_momentum:.10g} kg m^2/s (max rel. drift "
                  f"{c['angular_momentum_rel_drift']:.2g}), E = {d.kinetic_energy:.10g} J "
                  f"(max rel. drift {c['energy_rel_drift']:.2g})")
     for e in result.expectations:
-        status = "ok  " if e["ok"] else "FAIL"
-        tol = f" +/- {e['tolerance']:.3g}" if "tolerance" in e else ""
-        unit = f" {e['unit']}" if "unit" in e else ""
-        lines.append(f"Expect     {status} {e['key']}: expected {e['expected']}{tol}{unit}, "
-                     f"got {e['got']}")
+        lines.append("Expect     " + _expectation_line(e))
     for p in result.outputs:
         lines.append(f"Wrote      {p}")
     return "\n".join(lines)

@@ -84,7 +84,9 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
     """
     t = np.asarray(t, dtype=float)
     y0 = np.concatenate([np.asarray(quat0, float), np.asarray(omega0, float)])
-    scale = max(float(np.linalg.norm(omega0)), 1e-300)
+    # Rates set the absolute tolerance of the rate components; a body at rest (spun up by
+    # a torque) falls back to 1 rad/s, i.e. atol = atol_scale rad/s.
+    scale = float(np.linalg.norm(omega0)) or 1.0
     atol = atol_scale * np.array([1.0] * 4 + [scale] * 3)
     rhs = _rhs(body, tuple(torques))
     out = np.empty((t.size, 7))
@@ -101,8 +103,8 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
         sol = solve_ivp(rhs, (0.0, end), y0, method=method, t_eval=t_eval, rtol=rtol,
                         atol=atol)
         if not sol.success:
-            raise PropagationError(f"{method} integration failed at t = {sol.t[-1]:.6g} s: "
-                                   f"{sol.message}")
+            reached = f"{sol.t[-1]:.6g} s" if sol.t.size else "the first step"
+            raise PropagationError(f"{method} integration failed at {reached}: {sol.message}")
         out[order] = sol.y.T
     q = out[:, :4] / np.linalg.norm(out[:, :4], axis=1, keepdims=True)
     return q, out[:, 4:]

@@ -201,12 +201,10 @@ def load_scenario(path: str | Path) -> Scenario:
     if rtol is not None and (not isinstance(rtol, float) or not 0 < rtol < 1):
         raise r.fail("propagation.rtol", f"expected a float between 0 and 1, got {rtol!r}")
 
-    torques = doc.get("torques", [])
-    if not isinstance(torques, list):
-        raise r.fail("torques", "expected an array of tables [[torques]]")
-    if torques:
-        raise r.fail("torques", "perturbation torques are not available in this version yet; "
-                                "remove the [[torques]] tables for a torque-free run")
+    torques = _torques(r, doc.get("torques", []), state.epoch)
+    if torques and method == "exact":
+        raise r.fail("propagation.method", "'exact' is the torque-free solution; remove it "
+                                           "(or use 'integrator') with [[torques]]")
 
     out = r.table(doc, "output", required=False)
     netcdf = r.string(out, "netcdf", "output")
@@ -215,6 +213,23 @@ def load_scenario(path: str | Path) -> Scenario:
                     duration=duration, step=step, method=method, rtol=rtol,
                     torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect)
+
+
+def _torques(r: _Reader, tables, epoch) -> tuple:
+    """Each ``[[torques]]`` table becomes a torque model (see docs/torques.md)."""
+    from .torques import TorqueConfigError, from_config
+
+    if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
+        raise r.fail("torques", "expected an array of tables [[torques]]")
+    models = []
+    for i, table in enumerate(tables):
+        try:
+            models.append(from_config(table, base_epoch=epoch))
+        except TorqueConfigError as exc:
+            raise r.fail(f"torques[{i}].{exc.key}", exc.reason) from None
+        except AttitudeError as exc:
+            raise r.fail(f"torques[{i}]", str(exc)) from None
+    return tuple(models)
 
 
 def _body(r: _Reader, table: dict, folder: Path) -> RigidBody:
@@ -385,7 +400,7 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None) -> Run
     from .torquefree import diagnose
 
     eph = propagate(scenario.body, scenario.state, scenario.times, method=scenario.method,
-                    rtol=scenario.rtol)
+                    rtol=scenario.rtol, torques=list(scenario.torques))
     diagnosis = diagnose(scenario.body, scenario.state)
     conservation = eph.conservation()
     expectations = check_expectations(scenario, diagnosis, conservation)

@@ -67,7 +67,8 @@ def test_good_scenario_is_parsed_with_units(tmp_path):
     ('epoch = "2030-01-01T00:00:00"', "epoch = 2030", "state.epoch", "expected a string"),
     ("[0, 0, 0, 1]", "[0, 0, 0, 2]", "state.attitude.quaternion_scalar_last", "norm 2"),
     ('unit = "deg/s"', 'unit = "deg"', "state.omega_body", "cannot be converted"),
-    ("[5.0, 0.0, 20.0]", '["nan", 0.0, 20.0]', "state.omega_body", "expected numbers"),
+    ("[5.0, 0.0, 20.0]", '["x", 0.0, 20.0]', "state.omega_body", "cannot read"),
+    ("[5.0, 0.0, 20.0]", "[nan, 0.0, 20.0]", "state.omega_body", "must be finite"),
     ('netcdf = "out.nc"', "netcdf = 3", "output.netcdf", "expected a string"),
 ])
 def test_malformed_scenarios_name_the_file_and_key(tmp_path, old, new, key, message):
@@ -158,3 +159,31 @@ def test_shape_model_body_from_scenario(tmp_path):
     (tmp_path / "open.obj").write_text(CUBE_OBJ.rsplit("f", 1)[0])
     with pytest.raises(att.ScenarioError, match="body.shape: .*not closed"):
         load_scenario(write(tmp_path, text.replace("cube.obj", "open.obj")))
+
+
+def test_scenario_with_torques_uses_the_integrator(tmp_path):
+    """A sphere under a constant body torque about z: w3 = w0 + M t / I (closed form)."""
+    text = GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
+                        "principal_moments = [2.0, 2.0, 2.0]") + """
+[[torques]]
+type = "constant"
+torque = { value = [0.0, 0.0, 0.01], unit = "N m" }
+frame = "body"
+"""
+    sc = load_scenario(write(tmp_path, text))
+    result = run_scenario(sc)
+    assert "integrator" in result.ephemeris.dataset.attrs["source"]
+    w = result.ephemeris.dataset.angular_velocity.values
+    np.testing.assert_allclose(w[-1, 2], np.radians(20.0) + 0.01 * 120.0 / 2.0, rtol=1e-11)
+
+
+@pytest.mark.parametrize("table, key, message", [
+    ('type = "gravity_gradient"\nmu = "3.986e14 m3/s2"\norbit = { a = "7000 km", e = 1.2 }',
+     "torques[0].orbit.e", "must be in"),
+    ('type = "constnat"', "torques[0].type", "did you mean 'constant'"),
+])
+def test_bad_torque_tables_name_the_key(tmp_path, table, key, message):
+    path = write(tmp_path, GOOD + "\n[[torques]]\n" + table + "\n")
+    with pytest.raises(att.ScenarioError, match=message) as info:
+        load_scenario(path)
+    assert str(info.value).startswith(f"{path}: {key}: "), str(info.value)

@@ -1,0 +1,1205 @@
+"""Perturbation torques: the hook and the built-in models.
+
+The protocol
+------------
+A torque model is any callable
+
+.. code-block:: python
+
+    torque(t, quaternion, omega_body, body) -> (..., 3) ndarray   # body frame, N m
+
+with
+
+``t``
+    seconds since the epoch (float, or an array for a vectorised call);
+``quaternion``
+    the attitude, body -> inertial, scalar-last ``(x, y, z, w)``, shape ``(..., 4)``
+    (the built-in models also take a scipy ``Rotation`` stack and tolerate a
+    quaternion that is not exactly unit: integrators pass their raw stage values);
+``omega_body``
+    body-frame angular velocity, rad/s, shape ``(..., 3)``;
+``body``
+    the :class:`~attitude.body.RigidBody` (the built-in models also take a sequence
+    of bodies, one per leading element, or an inertia array ``(..., 3, 3)``).
+
+Leading axes broadcast: a scalar ``t`` with a ``(4,)`` quaternion gives ``(3,)``; arrays
+``(n,)``, ``(n, 4)``, ``(n, 3)`` give ``(n, 3)``.  The integrators add the returned torque
+to Euler's equations ``I dω/dt = (I ω) x ω + M``.
+
+A plain Python function with this signature is a valid model.  Models derived from
+:class:`TorqueModel` add with ``+`` (``GravityGradient(...) + EnergyDissipation(...)``
+is a :class:`SumTorque`); :func:`as_torque_model` wraps a plain function so that it can
+take part in a sum.  Each model says whether it depends on the angular velocity
+(:attr:`TorqueModel.velocity_dependent`): splitting integrators may treat
+velocity-independent (conservative) torques as pure kicks.
+
+Built-in models
+---------------
+============================  ========================================================
+:class:`GravityGradient`      point-mass primary, ``3 mu / r^5 (r x I r)``
+:class:`ConstantTorque`       fixed torque in body or inertial axes
+:class:`EnergyDissipation`    internal energy sink (damper, fuel slosh): keeps ``|L|``,
+                              bleeds kinetic energy toward ``L^2 / 2C`` in a time constant
+:class:`EddyCurrentDamping`   ``(M (ω x B)) x B`` in a uniform or tilted-dipole field
+:class:`HeavyTopPivot`        uniform gravity about a fixed pivot (the heavy top)
+============================  ========================================================
+
+:func:`from_config` builds any of them from a scenario ``[[torques]]`` table.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+from astropy import units as u
+from scipy.spatial.transform import Rotation
+
+from ._units import parse_quantity
+from .body import SYMMETRY_RTOL, RigidBody
+from .errors import AttitudeError
+from .orbit import KeplerOrbit, OrbitError, as_path
+
+__all__ = [
+    "TorqueModel",
+    "SumTorque",
+    "FunctionTorque",
+    "as_torque_model",
+    "GravityGradient",
+    "ConstantTorque",
+    "EnergyDissipation",
+    "EddyCurrentDamping",
+    "HeavyTopPivot",
+    "UniformField",
+    "TiltedDipoleField",
+    "TorqueConfigError",
+    "from_config",
+    "TORQUE_TYPES",
+    "EARTH_MU",
+    "EARTH_DIPOLE_MOMENT",
+    "EARTH_DIPOLE_TILT",
+    "EARTH_DIPOLE_POLE_LONGITUDE",
+    "EARTH_ROTATION_RATE",
+    "STANDARD_GRAVITY",
+]
+
+#: Gravitational parameter of the Earth (EGM2008 / WGS 84), m^3/s^2.
+EARTH_MU = 3.986004418e14
+#: Magnitude of the Earth's dipole moment, A m^2 (``B0 = 1e-7 m / R^3 = 3.07e-5 T`` at
+#: the equator for R = 6371.2 km; Wertz's 3.12e-5 T corresponds to 8.1e22 A m^2).
+EARTH_DIPOLE_MOMENT = 7.94e22
+#: Angle between the dipole axis and the rotation axis (IGRF-13, epoch 2020: 9.4 deg), rad.
+EARTH_DIPOLE_TILT = np.radians(9.4)
+#: East longitude of the northern geomagnetic pole (IGRF-13, 2020: 72.7 deg W), rad.
+EARTH_DIPOLE_POLE_LONGITUDE = np.radians(-72.7)
+#: Sidereal rotation rate of the Earth (IERS), rad/s.
+EARTH_ROTATION_RATE = 7.292115e-5
+#: Standard acceleration of gravity, m/s^2.
+STANDARD_GRAVITY = 9.80665
+_MU0_OVER_4PI = 1e-7  # T m / A
+
+
+class TorqueConfigError(AttitudeError, ValueError):
+    """A torque table (or constructor argument) that cannot be used.
+
+    ``str(err)`` starts with the key path inside the table (``"orbit.e: must be in [0, 1),
+    got 1.2"``); ``err.key`` holds that path, ``err.reason`` the rest, so that scenario
+    readers can prefix the path of the table itself.
+    """
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        self.reason = message
+        super().__init__(f"{key}: {message}")
+
+
+# --- small numpy kernels (integrators call models once per stage: keep overhead low) ----
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` along the last axis, broadcasting (faster than ``np.cross`` on 3-vectors)."""
+    if a.ndim == 1 and b.ndim == 1:      # one epoch: plain floats beat numpy dispatch
+        a0, a1, a2 = a.tolist()
+        b0, b1, b2 = b.tolist()
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    if a.ndim == 1 and b.ndim == 1:
+        return np.dot(a, b)
+    return np.sum(a * b, axis=-1)
+
+
+def _rotate(q: np.ndarray, v: np.ndarray, sign: float) -> np.ndarray:
+    """Rotate ``v`` by the unit quaternion ``q`` (``sign = 1``) or by its inverse
+    (``sign = -1``): ``v' = v + 2 w (u x v) + 2 u x (u x v)``, ``q = (u, w)``."""
+    if q.ndim == 1 and v.ndim == 1:
+        x, y, z, w = q.tolist()
+        x, y, z = sign * x, sign * y, sign * z
+        v0, v1, v2 = v.tolist()
+        t0, t1, t2 = 2 * (y * v2 - z * v1), 2 * (z * v0 - x * v2), 2 * (x * v1 - y * v0)
+        return np.array([v0 + w * t0 + y * t2 - z * t1, v1 + w * t1 + z * t0 - x * t2,
+                         v2 + w * t2 + x * t1 - y * t0])
+    uu, w = sign * q[..., :3], q[..., 3:]
+    t = 2.0 * _cross(uu, v)
+    return v + w * t + _cross(uu, t)
+
+
+def _to_body(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Inertial vectors ``v`` in body axes (``q`` body -> inertial, scalar-last)."""
+    return _rotate(q, v, -1.0)
+
+
+def _unit_quaternion(quaternion) -> np.ndarray:
+    if isinstance(quaternion, Rotation):
+        return quaternion.as_quat()
+    q = np.asarray(quaternion, dtype=float)
+    if q.shape[-1:] != (4,):
+        raise ValueError(f"quaternion: expected shape (..., 4) scalar-last, got {q.shape}")
+    if q.ndim == 1:
+        return q / np.sqrt(np.dot(q, q))
+    return q / np.sqrt(np.sum(q * q, axis=-1, keepdims=True))
+
+
+def _inertia_of(body) -> np.ndarray:
+    """Inertia ``(3, 3)`` of a body, or ``(n, 3, 3)`` of a sequence of bodies."""
+    if isinstance(body, RigidBody):
+        return body.inertia
+    if isinstance(body, np.ndarray):
+        if body.shape[-2:] != (3, 3):
+            raise ValueError(f"body: expected an inertia array (..., 3, 3), got {body.shape}")
+        return body
+    if hasattr(body, "inertia"):
+        return np.asarray(body.inertia, dtype=float)
+    if isinstance(body, Sequence) and len(body) > 0:
+        return np.stack([_inertia_of(b) for b in body])
+    raise TypeError(f"body: expected a RigidBody, a sequence of them or an inertia array, "
+                    f"got {type(body).__name__}")
+
+
+def _moments_of(body) -> np.ndarray:
+    """Sorted principal moments, ``(3,)`` or ``(n, 3)``."""
+    if isinstance(body, RigidBody):
+        return body.principal_moments
+    if isinstance(body, np.ndarray) or hasattr(body, "inertia"):
+        return np.linalg.eigvalsh(_inertia_of(body))
+    return np.stack([_moments_of(b) for b in body])
+
+
+def _mass_of(body) -> np.ndarray | float | None:
+    if isinstance(body, RigidBody) or hasattr(body, "mass"):
+        return body.mass
+    if isinstance(body, Sequence) and not isinstance(body, np.ndarray):
+        masses = [_mass_of(b) for b in body]
+        return None if any(m is None for m in masses) else np.asarray(masses, dtype=float)
+    return None
+
+
+def _matvec(inertia: np.ndarray, v: np.ndarray) -> np.ndarray:
+    if inertia.ndim == 2:
+        return v @ inertia.T
+    return np.einsum("...ij,...j->...i", inertia, v)
+
+
+# --- conversions of constructor arguments -------------------------------------------------
+
+
+def _quantity(value, unit: str, key: str, *, shape: tuple | None = ()):
+    """A number (SI), a string parsed by astropy, a Quantity, or ``{value, unit}``."""
+    target = u.Unit(unit)
+    if isinstance(value, bool) or value is None:
+        raise TorqueConfigError(key, f"expected a quantity in {target}, got {value!r}")
+    if isinstance(value, Mapping):
+        _check_keys(value, ("value", "unit"), key)
+        if "value" not in value or "unit" not in value:
+            raise TorqueConfigError(key, "a quantity table needs both 'value' and 'unit'")
+        try:
+            q = u.Quantity(value["value"], u.Unit(value["unit"]), dtype=float)
+        except (ValueError, TypeError) as exc:
+            raise TorqueConfigError(key, f"cannot read {dict(value)!r} as a quantity "
+                                         f"({exc})") from None
+    elif isinstance(value, str):
+        try:
+            q = parse_quantity(value)
+        except (ValueError, TypeError):
+            raise TorqueConfigError(key, f"cannot parse {value!r} as a quantity; write a "
+                                         f"number and a unit such as '1.5 {target}'") from None
+    elif isinstance(value, u.Quantity):
+        q = value
+    else:
+        try:
+            q = np.asarray(value, dtype=float) * target
+        except (ValueError, TypeError):
+            raise TorqueConfigError(key, f"expected a number or a quantity in {target}, "
+                                         f"got {value!r}") from None
+    try:
+        equiv = u.dimensionless_angles() if target.physical_type != "dimensionless" else []
+        out = np.asarray(q.to_value(target, equivalencies=equiv), dtype=float)
+    except u.UnitConversionError:
+        raise TorqueConfigError(key, f"unit '{q.unit}' cannot be converted to "
+                                     f"'{target}'") from None
+    if shape is not None and out.shape != shape:
+        raise TorqueConfigError(key, f"expected shape {shape}, got {out.shape}")
+    if not np.all(np.isfinite(out)):
+        raise TorqueConfigError(key, f"every value must be finite, got {out.tolist()}")
+    return float(out) if out.ndim == 0 else out
+
+
+def _positive(value, unit: str, key: str) -> float:
+    x = _quantity(value, unit, key)
+    if not x > 0:
+        raise TorqueConfigError(key, f"must be positive, got {x!r} {u.Unit(unit)}")
+    return x
+
+
+def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
+    for key in table:
+        if key not in allowed:
+            path = f"{where}.{key}" if where else str(key)
+            hint = _SYNONYMS.get(str(key).lower())
+            if hint not in allowed:
+                near = difflib.get_close_matches(str(key), list(allowed), n=1)
+                hint = near[0] if near else None
+            did = f"did you mean {hint!r}? " if hint else ""
+            raise TorqueConfigError(path, f"unknown key; {did}allowed keys: "
+                                          f"{', '.join(allowed)}")
+
+
+_SYNONYMS = {
+    "eccentricity": "e", "inclination": "i", "semi_major_axis": "a", "semimajor_axis": "a",
+    "sma": "a", "right_ascension": "raan", "node": "raan", "omega": "argp",
+    "argument_of_periapsis": "argp", "argument_of_perigee": "argp", "arg_periapsis": "argp",
+    "m0": "mean_anomaly", "m": "mean_anomaly", "tau": "time_constant",
+    "timescale": "time_constant", "gm": "mu", "vector": "torque", "value": "torque",
+    "conductivity_tensor": "magnetic_tensor", "tensor": "magnetic_tensor", "l": "pivot_to_com",
+    "com": "pivot_to_com", "gravity": "g",
+}
+
+
+# --- the protocol --------------------------------------------------------------------
+
+
+class TorqueModel:
+    """Base class of torque models: call protocol, broadcasting and ``+``.
+
+    Subclasses implement :meth:`evaluate`, which receives numpy arrays (``t`` as an
+    array, a unit quaternion, ``omega_body``) and returns body-frame torques that
+    broadcast over the leading axes; :meth:`__call__` does the conversions.
+
+    Attributes
+    ----------
+    velocity_dependent : bool
+        Whether the torque depends on ``omega_body`` (dissipative models do; gravity
+        gradient, constant and pivot torques do not).
+    """
+
+    velocity_dependent: bool = True
+
+    def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
+        """Body-frame torque, N m, shape ``broadcast(t, quaternion[..., 0],
+        omega_body[..., 0]) + (3,)``."""
+        t = np.asarray(t, dtype=float)
+        q = _unit_quaternion(quaternion)
+        w = np.asarray(omega_body, dtype=float)
+        out = np.asarray(self.evaluate(t, q, w, body), dtype=float)
+        if out.shape == (3,) and t.ndim == 0 and q.ndim == 1 and w.ndim == 1:
+            return out
+        lead = np.broadcast_shapes(t.shape, q.shape[:-1], w.shape[:-1], out.shape[:-1])
+        return out if out.shape[:-1] == lead else np.broadcast_to(out, lead + (3,)).copy()
+
+    def evaluate(self, t: np.ndarray, quaternion: np.ndarray, omega_body: np.ndarray,
+                 body) -> np.ndarray:
+        """The torque on numpy arrays: ``t`` (float array), ``quaternion`` (unit,
+        scalar-last, body -> inertial), ``omega_body`` (rad/s); body-frame N m, broadcast
+        over the leading axes.  Subclasses implement this."""
+        raise NotImplementedError(f"{type(self).__name__} must implement evaluate()")
+
+    def __add__(self, other):
+        try:
+            other = as_torque_model(other)
+        except TypeError:
+            return NotImplemented
+        return SumTorque(self, other)
+
+    def __radd__(self, other):
+        if isinstance(other, (int, float)) and other == 0:  # sum([gg, damping])
+            return self
+        try:
+            other = as_torque_model(other)
+        except TypeError:
+            return NotImplemented
+        return SumTorque(other, self)
+
+
+class SumTorque(TorqueModel):
+    """The sum of several torque models (what ``a + b`` returns).
+
+    Parameters
+    ----------
+    *terms : torque models or plain functions
+        Nested sums are flattened.
+    """
+
+    def __init__(self, *terms):
+        flat = []
+        for term in terms:
+            term = as_torque_model(term)
+            flat.extend(term.terms if isinstance(term, SumTorque) else [term])
+        self.terms = tuple(flat)
+        self.velocity_dependent = any(t.velocity_dependent for t in self.terms)
+
+    def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
+        total = None
+        for term in self.terms:
+            out = np.asarray(term(t, quaternion, omega_body, body), dtype=float)
+            total = out if total is None else total + out
+        if total is None:
+            lead = np.broadcast_shapes(np.shape(t), np.shape(omega_body)[:-1])
+            return np.zeros(lead + (3,))
+        return total
+
+    def __len__(self) -> int:
+        return len(self.terms)
+
+    def __iter__(self):
+        return iter(self.terms)
+
+    def __repr__(self) -> str:
+        return " + ".join(repr(t) for t in self.terms) if self.terms else "SumTorque()"
+
+
+class FunctionTorque(TorqueModel):
+    """A plain function ``f(t, quaternion, omega_body, body) -> torque`` as a model.
+
+    The function receives the arguments exactly as the caller passes them (no
+    conversion), so it must itself handle the shapes it is called with.
+
+    Parameters
+    ----------
+    function : callable
+    velocity_dependent : bool
+        Declare ``False`` if the torque does not depend on ``omega_body`` (it lets a
+        splitting integrator treat it as a conservative kick).
+    """
+
+    def __init__(self, function: Callable, *, velocity_dependent: bool = True):
+        if not callable(function):
+            raise TypeError(f"expected a callable torque(t, quaternion, omega_body, body), "
+                            f"got {type(function).__name__}")
+        self.function = function
+        self.velocity_dependent = bool(velocity_dependent)
+
+    def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
+        return np.asarray(self.function(t, quaternion, omega_body, body), dtype=float)
+
+    def __repr__(self) -> str:
+        return f"FunctionTorque({getattr(self.function, '__name__', repr(self.function))})"
+
+
+def as_torque_model(obj, *, velocity_dependent: bool = True) -> TorqueModel:
+    """Return ``obj`` if it is a :class:`TorqueModel`, else wrap a callable in a
+    :class:`FunctionTorque` (so that ``+`` works on it).
+
+    Raises
+    ------
+    TypeError
+        If ``obj`` is not callable.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.torques import ConstantTorque, as_torque_model
+    >>> def spin_up(t, quaternion, omega_body, body):
+    ...     return np.broadcast_to([0.0, 0.0, 1e-3], np.shape(omega_body))
+    >>> model = as_torque_model(spin_up) + ConstantTorque([1e-3, 0.0, 0.0])
+    >>> model(0.0, [0, 0, 0, 1], [0.0, 0.0, 0.1], None)
+    array([0.001, 0.   , 0.001])
+    """
+    if isinstance(obj, TorqueModel):
+        return obj
+    return FunctionTorque(obj, velocity_dependent=velocity_dependent)
+
+
+# --- gravity gradient ------------------------------------------------------------------
+
+
+class GravityGradient(TorqueModel):
+    """Gravity-gradient torque of a point-mass primary.
+
+    .. math::
+
+        M = \\frac{3\\mu}{r^3}\\,\\hat r \\times (I \\hat r)
+          = \\frac{3\\mu}{r^5}\\, r \\times (I r)
+
+    with ``r`` the position of the body relative to the primary (the torque is even in
+    ``r``, so the sign convention does not matter) expressed in body axes through the
+    attitude, ``r_b = q^{-1} r q``, and ``I`` the body-frame inertia tensor about the
+    centre of mass.  The lowest order of the expansion of the primary's potential over
+    the body (Hughes 1986, Ch. 8): valid while the body is small compared with ``r``.
+    Conservative: it derives from the potential ``V = mu/(2 r^3) (3 r_hat . I r_hat -
+    tr I)`` (MacCullagh's formula), see :meth:`potential`.
+
+    Parameters
+    ----------
+    mu : float, Quantity or str, optional
+        Gravitational parameter of the primary, m^3/s^2.  Default: ``orbit.mu`` when the
+        orbit is a :class:`~attitude.orbit.KeplerOrbit`.
+    orbit : KeplerOrbit, path, callable or (3,) array
+        Where the body is: anything with ``position(t)`` (inertial, m; e.g.
+        :class:`~attitude.orbit.TabulatedPath` for a real ephemeris), a callable
+        ``t -> position`` or a fixed position vector.
+
+    Notes
+    -----
+    A body pitched by ``theta`` about an axis ``k`` normal to ``r`` with the two other
+    principal moments ``I_i, I_j`` (``r`` in their plane) feels
+    ``3 mu / (2 r^3) (I_j - I_i) sin 2 theta`` about ``k``; the torque vanishes when a
+    principal axis points at the primary.  In a circular orbit of mean motion ``n`` the
+    small pitch libration of an Earth-pointing body has frequency
+    ``n sqrt(3 (I_along - I_radial) / I_normal)``.
+
+    References
+    ----------
+    .. [1] Hughes, P. C. (1986). *Spacecraft Attitude Dynamics*. Wiley. Ch. 8.
+    .. [2] Touma, J. & Wisdom, J. (1994). Lie-Poisson integrators for rigid body
+       dynamics in the solar system. *Astron. J.* 107, 1189.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import GravityGradient
+    >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
+    >>> gg = GravityGradient(3.986004418e14, [7.0e6, 0.0, 0.0])   # primary along -x
+    >>> theta = np.radians(10.0)                                   # pitch about z
+    >>> q = [0.0, 0.0, np.sin(theta / 2), np.cos(theta / 2)]
+    >>> torque = gg(0.0, q, [0.0, 0.0, 0.0], body)
+    >>> expected = 1.5 * 3.986004418e14 / 7.0e6**3 * (200.0 - 100.0) * np.sin(2 * theta)
+    >>> bool(np.isclose(torque[2], -expected, rtol=1e-14))
+    True
+    """
+
+    velocity_dependent = False
+
+    def __init__(self, mu=None, orbit=None):
+        if orbit is None:
+            raise TorqueConfigError("orbit", "a gravity-gradient torque needs the body's "
+                                             "position: give a KeplerOrbit, a path, a "
+                                             "callable or a position vector")
+        self.orbit = as_path(orbit)
+        if mu is None:
+            if not isinstance(self.orbit, KeplerOrbit):
+                raise TorqueConfigError("mu", "give the gravitational parameter of the "
+                                              "primary (only a KeplerOrbit carries one)")
+            mu = self.orbit.mu
+        self.mu = _positive(mu, "m3/s2", "mu")
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        r = self.orbit.position(t)
+        r_b = _to_body(quaternion, r)
+        r2 = _dot(r_b, r_b)[..., None]
+        Ir = _matvec(_inertia_of(body), r_b)
+        return 3.0 * self.mu / (r2 * r2 * np.sqrt(r2)) * _cross(r_b, Ir)
+
+    def potential(self, t, quaternion, body) -> np.ndarray:
+        """Gravity-gradient potential energy ``V = mu/(2 r^3)(3 r_hat.I r_hat - tr I)``, J.
+
+        The second-order term of MacCullagh's formula for the potential energy of an
+        extended body, ``U = -mu m / r - mu/(2 r^3)(tr I - 3 r_hat.I r_hat)``: the part that
+        depends on the attitude (lowest when the axis of least inertia points at the
+        primary).  ``E_kin + V`` is conserved when the primary is fixed.
+        """
+        t = np.asarray(t, dtype=float)
+        q = _unit_quaternion(quaternion)
+        r_b = _to_body(q, self.orbit.position(t))
+        r2 = _dot(r_b, r_b)
+        inertia = _inertia_of(body)
+        trace = np.trace(inertia, axis1=-2, axis2=-1)
+        return self.mu / (2.0 * r2 * np.sqrt(r2)) * (3.0 * _dot(r_b, _matvec(
+            inertia, r_b)) / r2 - trace)
+
+    def __repr__(self) -> str:
+        return f"GravityGradient(mu={self.mu:.10g}, orbit={self.orbit!r})"
+
+
+# --- constant torque -------------------------------------------------------------------
+
+
+class ConstantTorque(TorqueModel):
+    """A torque fixed in body axes (a thruster misalignment, a stuck wheel) or in
+    inertial axes (rotated into the body frame by the attitude: ``M_b = q^{-1} M q``).
+
+    Parameters
+    ----------
+    torque : (3,) array-like, Quantity or ``{value, unit}``
+        N m.
+    frame : {"body", "inertial"}
+    """
+
+    velocity_dependent = False
+    FRAMES = ("body", "inertial")
+
+    def __init__(self, torque, frame: str = "body"):
+        self.torque = _quantity(torque, "N m", "torque", shape=(3,))
+        if frame not in self.FRAMES:
+            near = difflib.get_close_matches(str(frame), self.FRAMES, n=1)
+            did = f"did you mean {near[0]!r}? " if near else ""
+            raise TorqueConfigError("frame", f"unknown frame {frame!r}; {did}choose 'body' "
+                                             "or 'inertial'")
+        self.frame = frame
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        if self.frame == "body":
+            return self.torque.copy()
+        return _to_body(quaternion, self.torque)
+
+    def __repr__(self) -> str:
+        return f"ConstantTorque({self.torque.tolist()} N m, frame={self.frame!r})"
+
+
+# --- internal energy dissipation ----------------------------------------------------------
+
+
+class EnergyDissipation(TorqueModel):
+    """Internal energy dissipation (nutation damper, fuel slosh, flexible antennas):
+    the energy-sink model that turned Explorer 1 from a long-axis into a flat spinner.
+
+    The internal torque is the minimum-norm torque that keeps ``|L|`` and removes
+    kinetic energy, the component of ``ω`` perpendicular to ``L = I ω``:
+
+    .. math::
+
+        M = -k\\,\\omega_\\perp = -k\\left(\\omega - \\frac{(\\omega\\cdot L)}{L^2} L
+            \\right) = \\frac{k}{L^2}\\, L \\times (L \\times \\omega)
+
+    so that (Euler, body frame, ``dL/dt = L x ω + M``)
+
+    .. math::
+
+        \\frac{d}{dt}\\tfrac12 L^2 = L\\cdot M = 0, \\qquad
+        \\frac{dE}{dt} = \\omega\\cdot M = -k\\,|\\omega_\\perp|^2 \\le 0 ,
+
+    with equality only for a pure principal-axis spin.  This is the "double bracket"
+    dissipation of Bloch et al. (1996), which keeps the Casimir ``|L|`` exactly and
+    drives the energy down to its minimum ``L^2 / (2 C)`` (spin about the major axis:
+    the major-axis rule of the energy-sink analysis, Hughes 1986, Ch. 5).
+
+    The coefficient is set from ``time_constant`` ``tau`` so that near the final state
+    the excess energy ``E - L^2/(2C)`` decays as ``exp(-t / tau)``.  Linearising about
+    spin about ``C`` gives ``dE/dt = -k ((C-A)^2 ω1^2 + (C-B)^2 ω2^2) / C^2`` while the
+    free nutation shares the excess energy equally between the two transverse terms, so
+    on average
+
+    .. math::
+
+        \\frac{1}{\\tau} = \\frac{k}{C}\\left(\\frac{C-A}{A} + \\frac{C-B}{B}\\right),
+        \\qquad k = \\frac{C}{\\tau\\,[(C-A)/A + (C-B)/B]} .
+
+    For a prolate body (``B = C``) the final spin axis is anywhere in the B-C plane and
+    only the ``ω1`` term is excited; there ``k = A C / (2 tau (C - A))`` gives the same
+    e-folding exactly.  (For a nearly prolate triaxial body the nutation period near the
+    final state, ``2 pi / (ω sqrt((C-A)(C-B)/(AB)))``, becomes long and the averaged rate
+    applies only once it is short compared with ``tau``.)  A spherical body has
+    ``ω_perp = 0``: no torque.
+
+    Parameters
+    ----------
+    time_constant : float (s), Quantity or str (``"30 min"``)
+        e-folding time of the excess kinetic energy near the final (major-axis) spin.
+
+    Notes
+    -----
+    **What is conserved.**  A mechanism inside the body conserves the *total* angular
+    momentum of body plus moving parts.  With only the rigid body's ``(q, ω)`` as state
+    (``L = I ω``), a torque that changes ``E`` must be non-zero and so rotates the
+    inertial vector ``L`` (``dL_inertial/dt = R M``); keeping ``L_inertial`` fixed
+    exactly while ``E`` decays would need the relative momentum of the moving parts as
+    an extra state.  This model keeps ``|L|`` exactly (``L . M = 0`` identically: to
+    round-off of the integrator) and, being the smallest torque that removes energy at
+    the given rate, disturbs the direction of ``L`` the least; that disturbance is
+    perpendicular to ``L`` and follows ``ω_perp``, which circles ``L`` at the nutation
+    frequency in inertial space, so it averages out to second order (the direction of
+    ``L`` wobbles by about ``k |ω_perp| / (|L| ω_nutation)`` and drifts slowly).
+
+    References
+    ----------
+    .. [1] Bloch, A. M., Krishnaprasad, P. S., Marsden, J. E. & Ratiu, T. S. (1996).
+       The Euler-Poincare equations and double bracket dissipation. *Commun. Math.
+       Phys.* 175, 1-42 (Eq. ``dM/dt = M x Ω + α M x (M x Ω)``).
+    .. [2] Hughes, P. C. (1986). *Spacecraft Attitude Dynamics*. Wiley. Ch. 5 (energy
+       sink, major-axis rule).
+    .. [3] Bracewell, R. N. & Garriott, O. K. (1958). Rotation of artificial Earth
+       satellites. *Nature* 182, 760-762 (Explorer 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import EnergyDissipation
+    >>> body = RigidBody.from_principal_moments([1.0, 1.5, 2.0])
+    >>> damper = EnergyDissipation("10 min")
+    >>> w = np.array([0.3, 0.1, 0.2])
+    >>> M = damper(0.0, [0, 0, 0, 1], w, body)
+    >>> L = body.inertia @ w
+    >>> float(abs(L @ M)) < 1e-16, bool(w @ M < 0)
+    (True, True)
+    """
+
+    velocity_dependent = True
+
+    def __init__(self, time_constant):
+        self.time_constant = _positive(time_constant, "s", "time_constant")
+        self._cache = None
+
+    def coefficient(self, body) -> np.ndarray | float:
+        """Damping coefficient ``k`` (kg m^2/s) for ``body`` (see the class notes)."""
+        cached = self._cache
+        if cached is not None and cached[0] is body:   # bodies are immutable values
+            return cached[1]
+        k = self._coefficient(_moments_of(body))
+        if isinstance(body, RigidBody):
+            self._cache = (body, k)
+        return k
+
+    def _coefficient(self, m: np.ndarray) -> np.ndarray | float:
+        A, B, C = m[..., 0], m[..., 1], m[..., 2]
+        tol = SYMMETRY_RTOL * C
+        prolate = (C - B) <= tol
+        sigma = np.where(prolate, 2.0 * (C - A) / A, (C - A) / A + (C - B) / B)
+        spherical = (C - A) <= tol
+        k = np.where(spherical, 0.0, C / (self.time_constant * np.where(spherical, 1.0,
+                                                                             sigma)))
+        return float(k) if np.ndim(k) == 0 else k
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        k = self.coefficient(body)
+        L = _matvec(_inertia_of(body), omega_body)
+        if L.ndim == 1:                                 # one epoch
+            L2 = float(np.dot(L, L))
+            if L2 == 0.0:
+                return np.zeros(3)
+            w_perp = omega_body - (np.dot(omega_body, L) / L2) * L
+            w_perp = w_perp - (np.dot(w_perp, L) / L2) * L    # re-project (round-off)
+            return -k * w_perp
+        k = np.asarray(k)[..., None]
+        L2 = _dot(L, L)[..., None]
+        safe = np.where(L2 > 0, L2, 1.0)
+        w_perp = omega_body - _dot(omega_body, L)[..., None] / safe * L
+        # re-project once: removes the rounding error of the projection along L, so that
+        # L . M vanishes to the last bit
+        w_perp = w_perp - _dot(w_perp, L)[..., None] / safe * L
+        return -k * w_perp
+
+    def __repr__(self) -> str:
+        return f"EnergyDissipation(time_constant={self.time_constant:.6g} s)"
+
+
+# --- magnetic fields and eddy currents --------------------------------------------------
+
+
+class UniformField:
+    """A magnetic field constant in inertial space, T (callable ``t -> (..., 3)``)."""
+
+    def __init__(self, field):
+        self.vector = _quantity(field, "T", "field", shape=(3,))
+
+    def __call__(self, t) -> np.ndarray:
+        return np.broadcast_to(self.vector, np.shape(t) + (3,)).copy()
+
+    def __repr__(self) -> str:
+        return f"UniformField({self.vector.tolist()} T)"
+
+
+class TiltedDipoleField:
+    """The Earth's field as a tilted dipole rotating with the Earth, along an orbit.
+
+    .. math::
+
+        B(r) = \\frac{\\mu_0}{4\\pi}\\,\\frac{m}{r^3}\\left(3 (\\hat m\\cdot\\hat r)\\hat r
+               - \\hat m\\right)
+
+    with ``hat m`` pointing from the northern geomagnetic pole to the southern one (the
+    Earth's moment points roughly south).  In Earth-fixed axes the northern geomagnetic
+    pole is at colatitude ``tilt`` and east longitude ``pole_longitude``; Earth-fixed
+    axes turn about the inertial ``z`` axis by ``theta(t) = rotation_angle + rate t``
+    (the Earth rotation angle).  The inertial frame is taken as equatorial (GCRF,
+    EME2000; precession and nutation ignored) and ``r`` comes from the path.
+
+    Parameters
+    ----------
+    orbit : KeplerOrbit, path, callable or (3,) array
+        Position of the body relative to the Earth's centre, inertial, m.
+    moment : float (A m^2), Quantity or str
+        Dipole moment; default :data:`EARTH_DIPOLE_MOMENT` (7.94e22 A m^2: 3.07e-5 T at
+        the magnetic equator on a 6371.2 km sphere).
+    tilt, pole_longitude : float (rad), Quantity or str
+        Colatitude and east longitude of the northern geomagnetic pole; defaults 9.4 deg
+        and -72.7 deg (IGRF-13, 2020).
+    rotation_angle : float (rad), Quantity or str
+        Earth rotation angle (Greenwich sidereal angle) at ``t = 0``.
+    rotation_rate : float (rad/s)
+        Default :data:`EARTH_ROTATION_RATE`.
+
+    References
+    ----------
+    .. [1] Wertz, J. R. (ed.) (1978). *Spacecraft Attitude Determination and Control*.
+       Reidel. Sec. 5.1 and App. H (dipole model of the geomagnetic field).
+    .. [2] Alken, P. et al. (2021). International Geomagnetic Reference Field: the
+       thirteenth generation. *Earth Planets Space* 73, 49.
+    """
+
+    def __init__(self, orbit, *, moment=EARTH_DIPOLE_MOMENT, tilt=EARTH_DIPOLE_TILT,
+                 pole_longitude=EARTH_DIPOLE_POLE_LONGITUDE, rotation_angle=0.0,
+                 rotation_rate=EARTH_ROTATION_RATE):
+        self.orbit = as_path(orbit)
+        self.moment = _positive(moment, "A m2", "moment")
+        self.tilt = _quantity(tilt, "rad", "tilt")
+        self.pole_longitude = _quantity(pole_longitude, "rad", "pole_longitude")
+        self.rotation_angle = _quantity(rotation_angle, "rad", "rotation_angle")
+        self.rotation_rate = _quantity(rotation_rate, "rad/s", "rotation_rate")
+
+    def dipole_direction(self, t) -> np.ndarray:
+        """Unit vector of the dipole moment (pointing south), inertial, ``S + (3,)``."""
+        theta = self.rotation_angle + self.rotation_rate * np.asarray(t, dtype=float)
+        lam = theta + self.pole_longitude
+        st = np.sin(self.tilt)
+        return -np.stack([st * np.cos(lam), st * np.sin(lam),
+                          np.broadcast_to(np.cos(self.tilt), np.shape(lam))], axis=-1)
+
+    def __call__(self, t) -> np.ndarray:
+        """Field at the body, inertial components, T, shape ``S + (3,)``."""
+        r = self.orbit.position(t)
+        m_hat = self.dipole_direction(t)
+        r2 = _dot(r, r)[..., None]
+        rn = np.sqrt(r2)
+        r_hat = r / rn
+        return _MU0_OVER_4PI * self.moment / (r2 * rn) * (
+            3.0 * _dot(m_hat, r_hat)[..., None] * r_hat - m_hat)
+
+    def __repr__(self) -> str:
+        return (f"TiltedDipoleField(moment={self.moment:.4g} A m2, tilt="
+                f"{np.degrees(self.tilt):.4g} deg, orbit={self.orbit!r})")
+
+
+class EddyCurrentDamping(TorqueModel):
+    """Eddy-current torque on a spinning conducting body in a slowly varying field.
+
+    .. math::
+
+        M = \\big(\\mathbf{M}\\,(\\omega \\times B)\\big) \\times B
+
+    with ``B`` the field in body axes (the inertial field rotated by the attitude) and
+    ``bold M`` the symmetric positive semi-definite *magnetic tensor* of the body (body
+    frame, S m^4), which depends only on its shape and conductivity (Ortiz Gomez &
+    Walker 2015).  It is always dissipative:
+    ``ω . M = -(ω x B) . bold M (ω x B) <= 0``.  For an isotropic tensor ``m 1``,
+    ``M = -m B^2 ω_perp`` (``ω_perp`` the component of ``ω`` normal to ``B``); a sphere
+    of moment ``I`` in a uniform field keeps ``ω_parallel`` and loses ``ω_perp`` as
+    ``exp(-m B^2 t / I)``.
+
+    Valid at low spin rates, when the induced field is negligible (skin depth much
+    larger than the wall thickness; Praly et al. 2012).
+
+    Parameters
+    ----------
+    magnetic_tensor : float or (3, 3) array-like, Quantity or str
+        S m^4, body frame.  A thin spherical shell (radius ``R``, thickness ``h``,
+        conductivity ``sigma``) has ``(2 pi / 3) sigma R^4 h`` times the identity, a solid
+        sphere ``(2 pi / 15) sigma R^5``: see :meth:`spherical_shell`,
+        :meth:`solid_sphere`.
+    field : callable ``t -> (..., 3)`` T, or (3,) array
+        Inertial magnetic field at the body: :class:`TiltedDipoleField` along an orbit,
+        :class:`UniformField`, any function, or a constant vector.
+
+    Notes
+    -----
+    Derivation for a sphere: in body axes the field changes as ``dB/dt = -ω x B``; the
+    induced electric field ``E = -(1/2) dB/dt x r`` is tangential and divergence-free,
+    so ``J = sigma E`` needs no surface charge; its moment ``m = (1/2) ∫ r x J dV =
+    -(sigma/4) ∫ r^2 (1 - r_hat r_hat) dV dB/dt`` gives ``(2 pi/3) sigma R^4 h`` for a
+    thin shell, and ``M = m x B``.
+
+    References
+    ----------
+    .. [1] Ortiz Gomez, N. & Walker, S. J. I. (2015). Eddy currents applied to
+       de-tumbling of space debris: analysis and validation of approximate proposed
+       methods. *Acta Astronautica* 114, 34-53.
+    .. [2] Praly, N., Hillion, M., Bonnal, C., Laurent-Varin, J. & Petit, N. (2012).
+       Study on the eddy current damping of the spin dynamics of space debris from the
+       Ariane upper stage. *Acta Astronautica* 76, 145-153.
+    """
+
+    velocity_dependent = True
+
+    def __init__(self, magnetic_tensor, field):
+        tensor = np.asarray(_quantity(magnetic_tensor, "S m4", "magnetic_tensor",
+                                      shape=None), dtype=float)
+        if tensor.shape == ():
+            if tensor < 0:
+                raise TorqueConfigError("magnetic_tensor", f"must be >= 0, got {tensor}")
+            self.isotropic = True
+        elif tensor.shape == (3, 3):
+            scale = np.max(np.abs(tensor))
+            if np.any(np.abs(tensor - tensor.T) > 1e-10 * scale):
+                raise TorqueConfigError("magnetic_tensor", "must be symmetric")
+            tensor = 0.5 * (tensor + tensor.T)
+            if np.linalg.eigvalsh(tensor)[0] < -1e-12 * scale:
+                raise TorqueConfigError("magnetic_tensor", "must be positive semi-definite "
+                                        "(a negative eigenvalue would pump energy in)")
+            self.isotropic = False
+        else:
+            raise TorqueConfigError("magnetic_tensor", f"expected a scalar or a 3x3 tensor, "
+                                                       f"got shape {tensor.shape}")
+        self.magnetic_tensor = tensor
+        if callable(field):
+            self.field = field
+        else:
+            self.field = UniformField(field)
+
+    @classmethod
+    def spherical_shell(cls, radius, thickness, conductivity, field) -> EddyCurrentDamping:
+        """Thin spherical shell: ``bold M = (2 pi / 3) sigma R^4 h`` (isotropic)."""
+        R = _positive(radius, "m", "radius")
+        h = _positive(thickness, "m", "thickness")
+        sigma = _positive(conductivity, "S/m", "conductivity")
+        return cls(2.0 * np.pi / 3.0 * sigma * R**4 * h, field)
+
+    @classmethod
+    def solid_sphere(cls, radius, conductivity, field) -> EddyCurrentDamping:
+        """Solid sphere: ``bold M = (2 pi / 15) sigma R^5`` (isotropic)."""
+        R = _positive(radius, "m", "radius")
+        sigma = _positive(conductivity, "S/m", "conductivity")
+        return cls(2.0 * np.pi / 15.0 * sigma * R**5, field)
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        B = _to_body(quaternion, np.asarray(self.field(t), dtype=float))
+        x = _cross(omega_body, B)
+        Mx = self.magnetic_tensor * x if self.isotropic else x @ self.magnetic_tensor.T
+        return _cross(Mx, B)
+
+    def __repr__(self) -> str:
+        m = (f"{float(self.magnetic_tensor):.6g}" if self.isotropic
+             else str(self.magnetic_tensor.tolist()))
+        return f"EddyCurrentDamping(magnetic_tensor={m} S m4, field={self.field!r})"
+
+
+# --- heavy top -------------------------------------------------------------------------
+
+
+class HeavyTopPivot(TorqueModel):
+    """Uniform gravity acting on a body that turns about a fixed pivot (the heavy top).
+
+    .. math::
+
+        M = l \\times (-m g\\, \\hat u_b) = m g\\, \\hat u_b \\times l
+
+    with ``l`` the body-frame vector from the pivot to the centre of mass and ``hat u_b``
+    the inertial "up" direction in body axes.  **The body's inertia must be the inertia
+    about the pivot** (``I_pivot = I_cm + m (|l|^2 1 - l l^T)``, e.g.
+    ``MassProperties.inertia_about(pivot)``), since Euler's equations are then written
+    about the fixed point.
+
+    For a symmetric top (``I1`` about the pivot, ``I3`` about the axis ``l``), steady
+    precession at rate ``Omega`` with the axis at angle ``theta`` from up and spin
+    component ``ω3`` requires ``m g l = Omega (I3 ω3 - I1 Omega cos theta)``; for a fast
+    top ``Omega ~= m g l / (I3 ω3)`` (Goldstein, Poole & Safko 2002, Sec. 5.7).
+
+    Parameters
+    ----------
+    mass : float (kg), Quantity or str, optional
+        Default: ``body.mass``.
+    pivot_to_com : (3,) array-like, Quantity or ``{value, unit}``
+        Pivot -> centre of mass, body frame, m.
+    g : float (m/s^2)
+        Default :data:`STANDARD_GRAVITY`.
+    up : (3,) array-like
+        Inertial direction opposite to gravity (normalised).
+
+    References
+    ----------
+    .. [1] Goldstein, H., Poole, C. & Safko, J. (2002). *Classical Mechanics*, 3rd ed.
+       Addison-Wesley. Sec. 5.7 (heavy symmetrical top).
+    """
+
+    velocity_dependent = False
+
+    def __init__(self, mass=None, pivot_to_com=None, g=STANDARD_GRAVITY, up=(0.0, 0.0, 1.0)):
+        self.mass = None if mass is None else _positive(mass, "kg", "mass")
+        if pivot_to_com is None:
+            raise TorqueConfigError("pivot_to_com", "give the vector from the pivot to the "
+                                                    "centre of mass (body frame, m)")
+        self.pivot_to_com = _quantity(pivot_to_com, "m", "pivot_to_com", shape=(3,))
+        self.g = _positive(g, "m/s2", "g")
+        up = _quantity(up, "", "up", shape=(3,))
+        norm = float(np.linalg.norm(up))
+        if norm == 0:
+            raise TorqueConfigError("up", "must be a non-zero vector")
+        self.up = up / norm
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        mass = self.mass if self.mass is not None else _mass_of(body)
+        if mass is None:
+            raise TorqueConfigError("mass", "the body has no mass: give HeavyTopPivot a "
+                                            "mass, or build the body with one")
+        up_b = _to_body(quaternion, self.up)
+        return np.asarray(mass)[..., None] * self.g * _cross(up_b, self.pivot_to_com)
+
+    def __repr__(self) -> str:
+        mass = "body.mass" if self.mass is None else f"{self.mass:.6g} kg"
+        return (f"HeavyTopPivot(mass={mass}, pivot_to_com={self.pivot_to_com.tolist()} m, "
+                f"g={self.g:.6g})")
+
+
+# --- scenario tables -------------------------------------------------------------------
+
+_ORBIT_KEYS = ("a", "e", "i", "raan", "argp", "mean_anomaly", "epoch")
+
+
+def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
+    if not isinstance(table, Mapping):
+        raise TorqueConfigError(key, "expected a table { a = \"7000 km\", e = 0.0, "
+                                     "i = \"0 deg\", ... }")
+    _check_keys(table, _ORBIT_KEYS, key)
+    if "a" not in table:
+        raise TorqueConfigError(f"{key}.a", "missing: the semi-major axis is required")
+    elements = {"mu": mu}
+    units = {"a": "m", "e": "", "i": "rad", "raan": "rad", "argp": "rad",
+             "mean_anomaly": "rad"}
+    for name, unit in units.items():
+        if name in table:
+            elements[name] = _quantity(table[name], unit, f"{key}.{name}")
+    try:
+        orbit = KeplerOrbit(**elements)
+    except OrbitError as err:
+        raise TorqueConfigError(f"{key}.{err.key}", err.reason) from None
+    if "epoch" in table:
+        from astropy.time import Time
+
+        if base_epoch is None:
+            raise TorqueConfigError(f"{key}.epoch", "an orbit epoch needs the scenario epoch "
+                                                    "(from_config(..., base_epoch=...))")
+        try:
+            epoch = (table["epoch"] if isinstance(table["epoch"], Time)
+                     else Time(table["epoch"], scale=base_epoch.scale))
+        except (ValueError, TypeError) as exc:
+            raise TorqueConfigError(f"{key}.epoch", f"cannot read {table['epoch']!r} as a "
+                                                    f"time ({exc})") from None
+        dt = float((base_epoch - epoch).to_value(u.s))
+        orbit = KeplerOrbit(orbit.mu, orbit.a, orbit.e, orbit.i, orbit.raan, orbit.argp,
+                            orbit.mean_anomaly + orbit.mean_motion * dt)
+    return orbit
+
+
+def _earth_rotation_angle(epoch) -> float:
+    """Earth rotation angle (IAU 2000) at ``epoch``, with UT1 ~ UTC (|UT1 - UTC| < 0.9 s,
+    4e-4 deg; beyond the leap-second table the last TAI - UTC is used, without the
+    "dubious year" warning)."""
+    import warnings
+
+    import erfa
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", erfa.ErfaWarning)
+        utc = epoch.utc
+    return float(erfa.era00(utc.jd1, utc.jd2))
+
+
+def _gravity_gradient(table, base_epoch):
+    _check_keys(table, ("type", "mu", "orbit"), "")
+    for key in ("mu", "orbit"):
+        if key not in table:
+            raise TorqueConfigError(key, "missing: a gravity_gradient torque needs 'mu' and "
+                                         "'orbit'")
+    mu = _positive(table["mu"], "m3/s2", "mu")
+    return GravityGradient(mu, _orbit_from_table(table["orbit"], mu, "orbit", base_epoch))
+
+
+def _constant(table, base_epoch):
+    _check_keys(table, ("type", "torque", "frame"), "")
+    if "torque" not in table:
+        raise TorqueConfigError("torque", "missing: give { value = [x, y, z], unit = "
+                                          "\"N m\" }")
+    frame = table.get("frame", "body")
+    if not isinstance(frame, str):
+        raise TorqueConfigError("frame", f"expected 'body' or 'inertial', got {frame!r}")
+    return ConstantTorque(table["torque"], frame=frame)
+
+
+def _dissipation(table, base_epoch):
+    _check_keys(table, ("type", "time_constant"), "")
+    if "time_constant" not in table:
+        raise TorqueConfigError("time_constant", "missing: give the e-folding time of the "
+                                                 "excess energy, e.g. \"30 min\"")
+    return EnergyDissipation(table["time_constant"])
+
+
+_FIELD_KEYS = {"dipole": ("model", "moment", "tilt", "pole_longitude", "rotation_angle",
+                          "rotation_rate"),
+               "uniform": ("model", "vector")}
+
+
+def _prefixed(prefix: str, build: Callable, *args, **kwargs):
+    """Call ``build``; re-raise its :class:`TorqueConfigError` under ``prefix.key``."""
+    try:
+        return build(*args, **kwargs)
+    except TorqueConfigError as err:
+        raise TorqueConfigError(f"{prefix}.{err.key}", err.reason) from None
+
+
+def _field_from_table(table, base_epoch):
+    field_table = table.get("field", {"model": "dipole"})
+    if not isinstance(field_table, Mapping):
+        raise TorqueConfigError("field", "expected a table { model = \"dipole\", ... } or "
+                                         "{ model = \"uniform\", vector = {...} }")
+    model = field_table.get("model", "dipole")
+    if model not in _FIELD_KEYS:
+        near = difflib.get_close_matches(str(model), list(_FIELD_KEYS), n=1)
+        did = f"did you mean {near[0]!r}? " if near else ""
+        raise TorqueConfigError("field.model", f"unknown field model {model!r}; {did}choose "
+                                               "'dipole' or 'uniform'")
+    _check_keys(field_table, _FIELD_KEYS[model], "field")
+    if model == "uniform":
+        for key in ("orbit", "mu"):
+            if key in table:
+                raise TorqueConfigError(key, "not used by a uniform field; remove it")
+        if "vector" not in field_table:
+            raise TorqueConfigError("field.vector", "missing: give { value = [x, y, z], "
+                                                    "unit = \"nT\" }")
+        return UniformField(_quantity(field_table["vector"], "T", "field.vector", shape=(3,)))
+    if "orbit" not in table:
+        raise TorqueConfigError("orbit", "missing: the dipole field is evaluated along the "
+                                         "body's orbit (or use field.model = \"uniform\")")
+    mu = _positive(table.get("mu", EARTH_MU), "m3/s2", "mu")
+    orbit = _orbit_from_table(table["orbit"], mu, "orbit", base_epoch)
+    kwargs = {k: field_table[k] for k in _FIELD_KEYS["dipole"][1:] if k in field_table}
+    if "rotation_angle" not in kwargs and base_epoch is not None:
+        kwargs["rotation_angle"] = _earth_rotation_angle(base_epoch)
+    return _prefixed("field", TiltedDipoleField, orbit, **kwargs)
+
+
+def _eddy_current(table, base_epoch):
+    _check_keys(table, ("type", "magnetic_tensor", "shell", "sphere", "field", "mu",
+                        "orbit"), "")
+    given = [k for k in ("magnetic_tensor", "shell", "sphere") if k in table]
+    if len(given) != 1:
+        raise TorqueConfigError(given[1] if len(given) > 1 else "magnetic_tensor",
+                                "give exactly one of 'magnetic_tensor' (S m4), 'shell' "
+                                "{radius, thickness, conductivity} or 'sphere' "
+                                "{radius, conductivity}")
+    field = _field_from_table(table, base_epoch)
+    kind = given[0]
+    if kind == "magnetic_tensor":
+        return EddyCurrentDamping(table["magnetic_tensor"], field)
+    spec = table[kind]
+    if not isinstance(spec, Mapping):
+        raise TorqueConfigError(kind, "expected a table { radius = ..., conductivity = ... }")
+    needed = ("radius", "thickness", "conductivity") if kind == "shell" else (
+        "radius", "conductivity")
+    _check_keys(spec, needed, kind)
+    for key in needed:
+        if key not in spec:
+            raise TorqueConfigError(f"{kind}.{key}", "missing")
+    if kind == "shell":
+        return _prefixed(kind, EddyCurrentDamping.spherical_shell, spec["radius"],
+                         spec["thickness"], spec["conductivity"], field)
+    return _prefixed(kind, EddyCurrentDamping.solid_sphere, spec["radius"],
+                     spec["conductivity"], field)
+
+
+def _heavy_top(table, base_epoch):
+    _check_keys(table, ("type", "mass", "pivot_to_com", "g", "up"), "")
+    if "pivot_to_com" not in table:
+        raise TorqueConfigError("pivot_to_com", "missing: give the pivot -> centre of mass "
+                                                "vector in the body frame, e.g. { value = "
+                                                "[0, 0, 4], unit = \"cm\" }")
+    kwargs = {k: table[k] for k in ("mass", "g", "up") if k in table}
+    return HeavyTopPivot(pivot_to_com=table["pivot_to_com"], **kwargs)
+
+
+#: ``type`` values of scenario ``[[torques]]`` tables and their builders.
+TORQUE_TYPES: dict[str, Callable] = {
+    "gravity_gradient": _gravity_gradient,
+    "constant": _constant,
+    "dissipation": _dissipation,
+    "eddy_current": _eddy_current,
+    "heavy_top": _heavy_top,
+}
+
+
+def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
+    """Build a torque model from a scenario ``[[torques]]`` table.
+
+    Quantities are numbers (SI), strings parsed by astropy (``"7000 km"``) or
+    ``{ value = ..., unit = "..." }`` tables.
+
+    ==================  ====================================================================
+    ``type``            keys
+    ==================  ====================================================================
+    gravity_gradient    ``mu`` (m3/s2); ``orbit = { a, e = 0, i = 0, raan = 0, argp = 0,
+                        mean_anomaly = 0, epoch }`` (``epoch``: when ``mean_anomaly``
+                        holds; default the scenario epoch)
+    constant            ``torque`` (N m, 3-vector); ``frame = "body" | "inertial"``
+    dissipation         ``time_constant`` (s)
+    eddy_current        one of ``magnetic_tensor`` (S m4, scalar or 3x3, body frame),
+                        ``shell = { radius, thickness, conductivity }``,
+                        ``sphere = { radius, conductivity }``; ``field = { model =
+                        "dipole", moment, tilt, pole_longitude, rotation_angle,
+                        rotation_rate }`` (default: the Earth's tilted dipole, with the
+                        rotation angle from ``base_epoch``) with ``orbit`` and ``mu``
+                        (default the Earth's), or ``field = { model = "uniform",
+                        vector = {value, unit} }``
+    heavy_top           ``pivot_to_com`` (m, body frame); ``mass`` (kg, default the
+                        body's); ``g`` (m/s2); ``up`` (inertial unit vector)
+    ==================  ====================================================================
+
+    Parameters
+    ----------
+    table : mapping
+        One ``[[torques]]`` table (``type`` plus the keys above).
+    base_epoch : astropy Time, optional
+        The scenario epoch (``t = 0``): used for ``orbit.epoch`` and the Earth rotation
+        angle of the dipole field.
+
+    Returns
+    -------
+    TorqueModel
+
+    Raises
+    ------
+    TorqueConfigError
+        (a ``ValueError``) whose message starts with the key path inside the table, e.g.
+        ``"orbit.e: must be in [0, 1), got 1.2"``; unknown keys and types come with a
+        did-you-mean suggestion.
+
+    Examples
+    --------
+    >>> from attitude.torques import from_config
+    >>> gg = from_config({"type": "gravity_gradient", "mu": "3.986004418e14 m3/s2",
+    ...                   "orbit": {"a": "7000 km", "e": 0.0, "i": "0 deg"}})
+    >>> gg
+    GravityGradient(mu=3.986004418e+14, orbit=KeplerOrbit(mu=398600441800000.0, a=7000000.0, ...))
+    >>> from_config({"type": "gravity_gradient", "mu": 3.986e14, "orbit": {"a": 7e6, "e": 1.2}})
+    Traceback (most recent call last):
+    ...
+    attitude.torques.TorqueConfigError: orbit.e: must be in [0, 1), got 1.2; ...
+    >>> from_config({"type": "disipation", "time_constant": "30 min"})
+    Traceback (most recent call last):
+    ...
+    attitude.torques.TorqueConfigError: type: unknown torque type 'disipation'; did you mean ...
+    """
+    if not isinstance(table, Mapping):
+        raise TorqueConfigError("type", f"expected a table with a 'type' key, got "
+                                        f"{type(table).__name__}")
+    if "type" not in table:
+        raise TorqueConfigError("type", f"missing; choose one of {', '.join(TORQUE_TYPES)}")
+    kind = table["type"]
+    if kind not in TORQUE_TYPES:
+        near = difflib.get_close_matches(str(kind), list(TORQUE_TYPES), n=1)
+        did = f"did you mean {near[0]!r}? " if near else ""
+        raise TorqueConfigError("type", f"unknown torque type {kind!r}; {did}choose one of "
+                                        f"{', '.join(TORQUE_TYPES)}")
+    return TORQUE_TYPES[kind](table, base_epoch)
