@@ -13,8 +13,10 @@ See ``API.md``-level names in ``__all__``.
 
 from __future__ import annotations
 
-from . import _units  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
-from . import torques  # noqa: F401  (att.torques.GravityGradient, ...)
+from . import (
+    _units,  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
+    torques,  # noqa: F401  (att.torques.GravityGradient, ...)
+)
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
 from .ephemeris import Ephemeris
 from .errors import (

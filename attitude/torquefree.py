@@ -338,6 +338,7 @@ def _triaxial_setup(I, w, dhi, dlo, lam):
         pj=el.cody_waite3(kappa_j / _FOUR_PI_LD),
         kr=_col(kappa_r), C0=np.zeros((n, 1)),
         QL=tuple(np.zeros((n, 1)) for _ in range(4)), lam=lam,
+        tiny=bool(np.any(m1 < 1e-60)),
     )
     for k in ("vt", "ph", "pj"):
         c[k] = tuple(_col(x) for x in c[k])
@@ -351,6 +352,32 @@ def _triaxial_setup(I, w, dhi, dlo, lam):
                  sigma=sigma, Q1=Q1, Q3=Q3, Dl=Dl, I1=I1, I2=I2, I3=I3, d21=d21, d32=d32,
                  d31=d31, s=s)
     return c, extra
+
+
+#: below this largest argument, RJ(x, y, 1, p) is taken from its z -> infinity limit
+_RJ_ASYMPTOTIC_MAX = 1e-40
+
+
+def _rj_small_args(x, y, p, rj):
+    """Replace ``RJ(x, y, 1, p)`` where ``x, y, p <= 1e-40`` by its limit (TF 22')::
+
+        RJ(x, y, 1, p) = 3 RC((sqrt(xy) + p)^2, p (sqrt x + sqrt y)^2) (1 + O(d log 1/d))
+
+    with ``d = max(x, y, p)`` (from ``RJ = 3/2 int dt / ((t+p) sqrt((t+x)(t+y)(t+1)))``
+    with ``t + 1 -> 1``, integrated exactly).  scipy's ``elliprj`` loses accuracy, then
+    returns NaN, once its arguments span more than ~1e150, which only the elliptic
+    branch with ``m1 < 1e-100`` reaches.
+    """
+    d = np.maximum(np.maximum(x, y), p)
+    small = d <= _RJ_ASYMPTOTIC_MAX
+    if not small.any():
+        return rj
+    xs, ys, ps = x[small] / d[small], y[small] / d[small], p[small] / d[small]
+    rxy = np.sqrt(xs * ys)
+    rc = sp.elliprc((rxy + ps) ** 2, ps * (np.sqrt(xs) + np.sqrt(ys)) ** 2)
+    rj = rj.copy()
+    rj[small] = 3.0 * rc / d[small]
+    return rj
 
 
 def _triaxial_eval(c, t, angles_only=False):
@@ -383,7 +410,11 @@ def _triaxial_eval(c, t, angles_only=False):
     w3 = c["a3s"] * dnK
     # precession angle: linear part in double-double, periodic part through RJ (TF 20-22)
     cn2 = cn_r * cn_r
-    rj = sp.elliprj(cn2, dn_r * dn_r, 1.0, c["omN"] + c["N"] * cn2)
+    dn2 = dn_r * dn_r
+    pj = c["omN"] + c["N"] * cn2
+    rj = sp.elliprj(cn2, dn2, 1.0, pj)
+    if c["tiny"]:  # m1 < 1e-60 in this block: guard scipy's RJ for tiny arguments (TF 22')
+        rj = _rj_small_args(cn2, dn2, pj, rj)
     per = r + c["beta"] * (sn_r * sn_r * sn_r) * rj
     F = _frac_turns(tsp, t, c["ph"], j, c["pj"])
     phi = (4.0 * math.pi) * F + c["kr"] * per - c["C0"]
