@@ -67,9 +67,15 @@ def fast_two_sum(a, b):
 
 
 def split(a):
-    """Veltkamp split ``a = hi + lo`` with ``hi`` holding 26 significant bits."""
-    c = _SPLITTER * a
-    hi = c - (c - a)
+    """Veltkamp split ``a = hi + lo`` with ``hi`` holding 26 significant bits.
+
+    For ``|a| > ~1e291`` (where ``2**27 a`` overflows) the split degrades gracefully
+    to ``(a, 0)``: products then lose their exact error term, nothing worse."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        c = _SPLITTER * a
+        hi = c - (c - a)
+    if not np.all(np.isfinite(hi)):
+        hi = np.where(np.isfinite(hi), hi, a)
     return hi, a - hi
 
 
