@@ -37,6 +37,7 @@ Rotation-state analysis of spacecraft and small bodies.
   attitude run scenarios/apophis.toml      propagate a scenario, print a summary,
                                            write the netCDF ephemeris
   attitude run FILE.toml --report R.json   also write a JSON report
+  attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML
 
 Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed.
 """
@@ -113,6 +114,30 @@ def _cmd_run(args) -> int:
     return EXIT_OK if result.ok else EXIT_EXPECTATION
 
 
+_CONVERT_HELP = """\
+Convert an ephemeris between netCDF (.nc) and CCSDS Attitude Ephemeris Messages
+(.aem: KVN text, .xml: XML), by file suffix.  AEM files are written in version 2.0 with
+ATTITUDE_TYPE = QUATERNION/ANGVEL unless --attitude-type says otherwise; AEM versions 1.0
+and 2.0 are read.  See docs/formats.md.
+
+  attitude convert scenarios/apophis.nc apophis.aem --object-name APOPHIS --object-id 99942
+  attitude convert apophis.aem apophis.xml
+  attitude convert mission.aem mission.nc
+"""
+
+
+def _cmd_convert(args) -> int:
+    from .aem import convert
+
+    options = {k: v for k, v in (("object_name", args.object_name),
+                                 ("object_id", args.object_id),
+                                 ("ref_frame_b", args.body_frame),
+                                 ("attitude_type", args.attitude_type)) if v is not None}
+    out = convert(args.input, args.output, **options)
+    print(f"Wrote      {out}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="attitude", description=_MAIN_HELP,
@@ -127,6 +152,18 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
     run.add_argument("--quiet", action="store_true", help="print nothing on success")
     run.set_defaults(func=_cmd_run)
+
+    conv = sub.add_parser("convert", help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml",
+                          description=_CONVERT_HELP,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+    conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem or .xml)")
+    conv.add_argument("output", metavar="OUT", help="output file (.nc, .aem or .xml)")
+    conv.add_argument("--object-name", help="AEM OBJECT_NAME (default: the body name)")
+    conv.add_argument("--object-id", help="AEM OBJECT_ID")
+    conv.add_argument("--body-frame", help="AEM REF_FRAME_B (default SC_BODY_1)")
+    conv.add_argument("--attitude-type", help="AEM ATTITUDE_TYPE (default QUATERNION/ANGVEL;"
+                      " also QUATERNION, EULER_ANGLE, ...)")
+    conv.set_defaults(func=_cmd_convert)
     return parser
 
 

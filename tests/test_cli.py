@@ -64,3 +64,30 @@ def test_shipped_scenarios_run(tmp_path):
     for path in sorted((ROOT / "scenarios").glob("*.toml")):
         proc = attitude("run", path, "-o", tmp_path / (path.stem + ".nc"), "--quiet")
         assert proc.returncode == 0, (path, proc.stderr)
+
+
+def test_convert_round_trip_through_aem_kvn_and_xml(tmp_path):
+    """netCDF -> AEM KVN -> AEM XML -> netCDF from the command line keeps the quaternions
+    to 1e-15 (CCSDS 504.0-B-2 allows 16 significant digits)."""
+    import numpy as np
+
+    import attitude as att
+
+    nc = tmp_path / "a.nc"
+    assert attitude("run", write(tmp_path, GOOD), "-o", nc, "--quiet").returncode == 0
+    for src, dst in (("a.nc", "a.aem"), ("a.aem", "a.xml"), ("a.xml", "b.nc")):
+        proc = attitude("convert", tmp_path / src, tmp_path / dst, "--object-id", "TEST-1")
+        assert proc.returncode == 0, proc.stderr
+    assert "CCSDS_AEM_VERS = 2.0" in (tmp_path / "a.aem").read_text()
+    a, b = att.Ephemeris.from_netcdf(nc), att.Ephemeris.from_netcdf(tmp_path / "b.nc")
+    np.testing.assert_allclose(b.dataset.quaternion, a.dataset.quaternion, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(b.time, a.time, rtol=0, atol=1e-9)
+
+
+def test_convert_bad_input_exits_2(tmp_path):
+    bad = tmp_path / "bad.aem"
+    bad.write_text("CCSDS_AEM_VERS = 9.9\n")
+    proc = attitude("convert", bad, tmp_path / "x.nc")
+    assert proc.returncode == 2 and "line 1" in proc.stderr and "Traceback" not in proc.stderr
+    proc = attitude("convert", tmp_path / "missing.nc", tmp_path / "x.aem")
+    assert proc.returncode == 2 and "no such file" in proc.stderr
