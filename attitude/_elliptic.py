@@ -31,7 +31,6 @@ __all__ = [
     "dd_mul_dd",
     "dd_add",
     "ld_to_dd",
-    "cody_waite3",
     "landen_chain",
     "k_from_chain",
     "landen_sncndn",
@@ -116,16 +115,6 @@ def ld_to_dd(x):
     hi = x.astype(np.float64)
     lo = (x - hi.astype(LD)).astype(np.float64)
     return hi, lo
-
-
-def cody_waite3(x):
-    """Split ``x`` (longdouble) into float64 ``c1 + c2 + c3`` where ``c1`` and
-    ``c2`` carry at most 27 significant bits, so that ``j * c1`` and ``j * c2``
-    are exact for integers ``|j| < 2**26`` (Cody & Waite 1980 argument
-    reduction)."""
-    hi, lo = ld_to_dd(x)
-    c1, c2 = split(hi)
-    return c1, c2, lo
 
 
 # --------------------------------------------------------------------------

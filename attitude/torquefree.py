@@ -33,6 +33,7 @@ from scipy import special as sp
 
 from . import _elliptic as el
 from .errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
+from .regimes import PERIOD_KEYS, REGIMES
 
 __all__ = [
     "free_rotation",
@@ -99,20 +100,17 @@ def _rotate(q, v):
     return v + w * t + np.cross(u, t)
 
 
-def _lin_turns(tsp, t, c, j=None, cj=None, add=None):
-    """``t * c (+ j * cj) (+ add)`` as an unevaluated sum ``p + e`` (double-double).
+def _lin_turns(tsp, t, c, add=None):
+    """``t * c (+ add)`` as an unevaluated sum ``p + e`` (double-double).
 
     ``c = (h1, h2, lo, hi)``: ``hi = h1 + h2`` is Veltkamp-split so its product with
-    the split time ``tsp`` is error-free (Dekker); ``cj`` is a Cody–Waite triple so
-    ``j * cj[0]`` and ``j * cj[1]`` are exact for integer ``|j| < 2**26`` (TF 20).
+    the split time ``tsp`` is error-free (Dekker 1971); ``lo`` is the longdouble
+    residual of the constant (TF 20).
     """
     th, tl = tsp
     ch, cl, clo, chi = c
     p = t * chi
     e = ((th * ch - p) + th * cl + tl * ch) + tl * cl + t * clo
-    if j is not None:
-        p, e2 = el.two_sum(p, j * cj[0])
-        e = e + e2 + (j * cj[1] + j * cj[2])
     if add is not None:
         p, e2 = el.two_sum(p, add)
         e = e + e2
@@ -120,10 +118,22 @@ def _lin_turns(tsp, t, c, j=None, cj=None, add=None):
 
 
 def _frac_turns(tsp, t, c, j=None, cj=None):
-    """Fractional part (in turns, ``|F| <~ 0.5``) of :func:`_lin_turns`, with absolute
-    error ~1e-16 however large ``t * c`` is."""
-    p, e = _lin_turns(tsp, t, c, j, cj)
-    return (p - np.rint(p)) + e
+    """Fractional part (turns, ``|F| <= 1/2``) of ``t * c (+ j * cj)``.
+
+    Each product is formed error-free and reduced modulo 1 on its own before the
+    parts are added, so the result has absolute error ~1e-16 however many turns
+    ``t * c`` and ``j * cj`` hold (up to ~1e15 turns).
+    """
+    p, e = _lin_turns(tsp, t, c)
+    f = p - np.rint(p)
+    if j is not None:
+        jh, jl = el.split(j)
+        ch, cl, clo, chi = cj
+        p2 = j * chi
+        e = e + (((jh * ch - p2) + jh * cl + jl * ch) + jl * cl + j * clo)
+        f = f + (p2 - np.rint(p2))
+    F = f + e
+    return F - np.rint(F)
 
 
 def _turn_const(x_ld):
@@ -335,7 +345,7 @@ def _triaxial_setup(I, w, dhi, dlo, lam):
         alp=_col(I1 * a1), bet=_col(I2 * a2), s=_col(s),
         I1=_col(I1), I2=_col(I2), I3=_col(I3),
         ph=_turn_const(w_lin / _FOUR_PI_LD),
-        pj=el.cody_waite3(kappa_j / _FOUR_PI_LD),
+        pj=_turn_const(kappa_j / _FOUR_PI_LD),
         kr=_col(kappa_r), C0=np.zeros((n, 1)),
         QL=tuple(np.zeros((n, 1)) for _ in range(4)), lam=lam,
         tiny=bool(np.any(m1 < 1e-60)),
@@ -696,16 +706,29 @@ def _run_group(ev, c, idx, tt, sw, out_q, out_w):
     shared = tt.shape[0] == 1
     T = tt.shape[-1]
     swg = sw[idx]
-    for rows, cols in _blocks(idx.size, T):
+    ng = idx.size
+    contiguous = ng == 0 or (idx[-1] - idx[0] == ng - 1)
+    if contiguous:  # write straight into the output (basic slicing, a view)
+        buf_q = out_q[idx[0]:idx[0] + ng]
+        buf_w = out_w[idx[0]:idx[0] + ng]
+    else:  # one scatter per group at the end
+        buf_q = np.empty((ng, T, 4))
+        buf_w = np.empty((ng, T, 3))
+    tg = tt if shared else tt[idx]
+    for rows, cols in _blocks(ng, T):
         cb = _sub(c, rows)
-        r_idx = idx[rows]
         swr = swg[rows][:, None]
-        tb = (tt[:, cols] if shared else tt[r_idx, cols]) * swr
+        tb = (tg[:, cols] if shared else tg[rows, cols]) * swr
         q, wv = ev(cb, tb)
+        oq = buf_q[rows, cols]
+        ow = buf_w[rows, cols]
         for k in range(4):
-            out_q[r_idx, cols, k] = q[k]
+            oq[..., k] = q[k]
         for k in range(3):
-            out_w[r_idx, cols, k] = wv[k] * swr
+            ow[..., k] = wv[k] * swr
+    if not contiguous:
+        out_q[idx] = buf_q
+        out_w[idx] = buf_w
 
 
 # ===========================================================================
@@ -719,13 +742,14 @@ class Diagnosis:
     ----------
     regime : str
         One of ``"PA-short"``, ``"PA-long"``, ``"SAM"``, ``"LAM"``, ``"separatrix"``,
-        ``"axisymmetric"``, ``"spherical"``, ``"at-rest"`` (API.md).
+        ``"axisymmetric"``, ``"spherical"``, ``"at-rest"`` (:data:`attitude.regimes.REGIMES`).
     periods : dict
-        Seconds.  ``polhode`` (period of omega in the body frame, ``4K/lambda``),
-        ``precession`` (mean period ``P_phi`` of the reference axis about L),
-        ``rotation`` (``P_psi``, period of the rotation angle about the reference axis;
-        equal to the polhode period), ``spin`` (``2 pi/|omega|``, principal-axis spin).
-        Keys whose period does not exist for the regime are absent.
+        Seconds, keys from :data:`attitude.regimes.PERIOD_KEYS`.  ``polhode`` (period of
+        omega in the body frame, ``4K/lambda``), ``precession`` (mean period ``P_phi`` of
+        the reference axis about L), ``rotation`` (``P_psi``, period of the rotation
+        angle about the reference axis; equal to the polhode period), ``spin``
+        (``2 pi/|omega|``, principal-axis spin).  Keys whose period does not exist for
+        the regime are absent.
     angular_momentum : float
         ``|L|`` (kg m^2/s).
     kinetic_energy : float
@@ -748,7 +772,7 @@ class Diagnosis:
         Principal axis (1 = A, 3 = C, ...) of the Euler angles: C for SAM and the
         separatrix, A for LAM, the symmetry axis of an axisymmetric body, the spin axis.
     k2 : float or None
-        Jacobi parameter ``m = k^2`` (SAM/LAM).
+        Jacobi parameter ``m = k^2`` (SAM/LAM; 1 on the separatrix).
     lam : float or None
         Jacobi frequency ``lambda`` (rad/s); rates are functions of ``lambda t``.
     mean_precession_rate : float or None
@@ -787,6 +811,12 @@ class Diagnosis:
     angular_momentum_principal: np.ndarray = field(default=None, repr=False)
     angular_momentum_inertial: np.ndarray | None = field(default=None, repr=False)
 
+    def __post_init__(self):
+        if self.regime not in REGIMES:  # pragma: no cover - internal consistency
+            raise ValueError(f"unknown regime {self.regime!r}")
+        if not set(self.periods) <= set(PERIOD_KEYS):  # pragma: no cover
+            raise ValueError(f"unknown period keys {sorted(self.periods)}")
+
 
 def branch_of(moments, omega0):
     """Propagation branch names (``"precession"``, ``"separatrix"``, ``"SAM"``,
@@ -805,7 +835,8 @@ def _atan2_sqrt(s2, c2):
     return float(np.arctan2(np.sqrt(np.float64(s2)), np.sqrt(np.float64(c2))))
 
 
-def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Diagnosis:
+def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
+                       quat0=None) -> Diagnosis:
     """Analytic diagnosis from principal moments and principal-frame rates.
 
     Parameters
@@ -818,6 +849,12 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
         Moments within ``rtol_symmetry * C`` are equal for the *label* (default
         ``attitude.body.SYMMETRY_RTOL``, 1e-12, the tolerance of
         ``RigidBody.symmetry``).  Propagation itself uses :data:`RTOL_AXISYMMETRIC`.
+    rtol_spin : float, optional
+        The state is labelled principal-axis spin (``PA-short``, ``PA-long``, or
+        ``separatrix`` for the intermediate axis) when the two smaller body components
+        of L are at most ``rtol_spin * |L|`` (default: ``rtol_symmetry``), so that the
+        1e-16 wobble left by rotating a spin into the principal frame does not turn it
+        into SAM/LAM.  Propagation itself uses :data:`PURE_SPIN_TOL`.
     quat0 : (4,) array_like, optional
         Principal -> inertial quaternion; gives ``angular_momentum_inertial``.
 
@@ -828,8 +865,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
     Notes
     -----
     Periods (Landau & Lifshitz §37; Samarasinha & A'Hearn 1991; Kaasalainen 2001):
-    ``P_polhode = P_psi = 4 K(m) / lambda`` and
-    ``P_phi = 2 pi / <phi'>`` with, for SAM,
+    ``P_polhode = P_psi = 4 K(m) / lambda`` and ``P_phi = 2 pi / <phi'>`` with, for SAM,
     ``<phi'> = L/C + L (C-A)/(A C) * Pi(-nu | m) / K(m)``, ``nu = C(B-A)/(A(C-B))``,
     and for LAM the same with A and C exchanged (docs/torquefree.md, TF 31-33).
     """
@@ -838,6 +874,8 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
             from .body import SYMMETRY_RTOL as rtol_symmetry
         except ImportError:  # pragma: no cover - body module absent
             rtol_symmetry = 1e-12
+    rtol_symmetry = max(float(rtol_symmetry), RTOL_AXISYMMETRIC)  # never finer than the solver
+    rtol_spin = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
     _, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
     if I.shape[0] != 1:
         raise InvalidStateError("diagnose_principal takes one body; use branch_of for batches")
@@ -865,14 +903,14 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
     bname = {_BR_PREC: "precession", _BR_SEP: "separatrix"}.get(int(br[0]), "elliptic")
     # excitation (E - E_min)/(E_max - E_min) from 2EC - L^2 = A(C-A)w1^2 + B(C-B)w2^2
     q1c = A * (C - A) * wv[0] ** 2 + B * (C - B) * wv[1] ** 2
-    exc = A * q1c / (L * L * (C - A)) if C > A else math.nan
-    base.update(dynamic_inertia=D, excitation=exc, energy_ratio=1.0 + q1c / (L * L),
+    exc = min(1.0, float(A * q1c / (L * L * (C - A)))) if C > A else math.nan
+    base.update(dynamic_inertia=D, excitation=exc, energy_ratio=float(1.0 + q1c / (L * L)),
                 branch=bname)
     tol = rtol_symmetry * C
     spin = {"spin": _TWO_PI / wn}
     Labs = np.abs(Lp)
     k = int(np.argmax(Labs))
-    pure = np.sort(Labs)[1] <= PURE_SPIN_TOL * L
+    pure = np.sort(Labs)[1] <= rtol_spin * L
 
     def theta_of(axis):
         c = Lp[axis] / L
@@ -907,21 +945,21 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
         sym = 2 if oblate else 0
         Is_ = C if oblate else A
         It = 0.5 * (A + B) if oblate else 0.5 * (B + C)
-        Om = wv[sym] * (It - Is_) / It
+        Om = float(wv[sym] * (It - Is_) / It)
         th = theta_of(sym)
         periods = {"precession": _TWO_PI * It / L}
         if Om != 0.0:
-            periods["polhode"] = periods["rotation"] = _TWO_PI / abs(float(Om))
+            periods["polhode"] = periods["rotation"] = _TWO_PI / abs(Om)
             dist = 1.0 if oblate else -1.0
         else:
             periods["spin"] = _TWO_PI / wn
             dist = 0.0
         return Diagnosis(regime="axisymmetric", periods=periods, separatrix_distance=dist,
-                         nutation_range=(th, th), stable=None, reference_axis=sym + 1,
-                         mean_precession_rate=L / It, **base)
+                         nutation_range=(th, th), stable=None if Om != 0.0 else False,
+                         reference_axis=sym + 1, mean_precession_rate=L / It, **base)
     # triaxial
-    if int(br[0]) == _BR_SEP or int(br[0]) == _BR_PREC:
-        # separatrix closed form, SAM labels: theta from pi/2 (asymptote) to theta_min
+    if int(br[0]) in (_BR_SEP, _BR_PREC):
+        # separatrix closed form, SAM labels: theta from theta_min to pi/2 (asymptote)
         v = _invariants_ld(Is, ws)
         s2 = v["I1"] * v["Q1"] / (v["d31"] * v["L2"])
         c2 = v["I3"] * v["Q3"] / (v["d31"] * v["L2"])
@@ -929,8 +967,8 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
         nut = (th, 0.5 * math.pi) if wv[2] >= 0 else (0.5 * math.pi, math.pi - th)
         lamb = float(np.sqrt(v["d32"] * v["Q3"] / (v["I1"] * v["I2"] * v["I3"]))[0]) * sw[0]
         return Diagnosis(regime="separatrix", periods={}, separatrix_distance=0.0,
-                         nutation_range=nut, stable=None, reference_axis=3, k2=1.0, lam=lamb,
-                         **base)
+                         nutation_range=nut, stable=None, reference_axis=3, k2=1.0,
+                         lam=float(lamb), **base)
     lam_side = int(br[0]) == _BR_LAM
     _, x = _triaxial_setup(Is, ws, dhi, dlo, lam_side)
     m1 = float(x["m1"][0])
@@ -941,9 +979,10 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
     lamb = x["lamb"][0] * _LD(sw[0])
     K = x["K"][0]
     P_pol = float(4 * K / lamb)
+    # mean precession rate (TF 31): linear rate + kappa_j * (dj/dt)
     phidot = (x["w_lin"][0] + x["kappa_j"][0] * x["sigma"] * x["lamb"][0] / (2 * K)) * _LD(sw[0])
     L2 = x["L"][0] ** 2
-    s2min = x["I1"][0] * x["Q1"][0] / (x["d31"][0] * L2)
+    s2min = x["I1"][0] * x["Q1"][0] / (x["d31"][0] * L2)  # nutation extremes (TF 34)
     c2min = x["I3"][0] * x["Q3"][0] / (x["d31"][0] * L2)
     s2max = x["I2"][0] * x["Q1"][0] / (x["d32"][0] * L2)
     c2max = x["I3"][0] * x["Dl"][0] / (x["d32"][0] * L2)
@@ -959,7 +998,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, quat0=None) -> Di
         k2=float(x["m"][0]), lam=float(lamb), mean_precession_rate=float(phidot), **base)
 
 
-def diagnose(body, state, *, rtol_symmetry=None) -> Diagnosis:
+def diagnose(body, state, *, rtol_symmetry=None, rtol_spin=None) -> Diagnosis:
     """Analytic torque-free diagnosis of a body in a state (``att.diagnose``).
 
     Parameters
@@ -968,8 +1007,8 @@ def diagnose(body, state, *, rtol_symmetry=None) -> Diagnosis:
         Uses ``principal_moments`` and ``body_to_principal``.
     state : attitude.AttitudeState
         Uses ``omega_body`` (rad/s, body frame) and ``attitude`` (body -> inertial).
-    rtol_symmetry : float, optional
-        See :func:`diagnose_principal`.
+    rtol_symmetry, rtol_spin : float, optional
+        Label tolerances, see :func:`diagnose_principal`.
 
     Returns
     -------
@@ -977,15 +1016,16 @@ def diagnose(body, state, *, rtol_symmetry=None) -> Diagnosis:
 
     Examples
     --------
-    >>> import numpy as np, attitude as att
+    >>> import attitude as att
     >>> from scipy.spatial.transform import Rotation
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.2, 0.0, 3.0])
-    >>> att.diagnose(body, state).regime
-    'SAM'
+    >>> d = att.diagnose(body, state)
+    >>> d.regime, sorted(d.periods)
+    ('SAM', ['polhode', 'precession', 'rotation'])
     """
     b2p = body.body_to_principal
     w_p = b2p.apply(np.asarray(state.omega_body, dtype=float))
     q_p2i = (state.attitude * b2p.inv()).as_quat()
     return diagnose_principal(body.principal_moments, w_p, rtol_symmetry=rtol_symmetry,
-                              quat0=q_p2i)
+                              rtol_spin=rtol_spin, quat0=q_p2i)

@@ -99,7 +99,7 @@ def taylor_solution(moments, omega0, quat0, times, dps=34, order=36):
                           tuple(map(float, quat0)), tuple(map(float, times)), dps, order)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _taylor_cached(moments, omega0, quat0, times, dps, order):
     with mp.workdps(dps):
         I = _mpf_vec(moments)
@@ -280,7 +280,7 @@ def closed_form_solution(moments, omega0, quat0, times, dps=40):
                           tuple(map(float, quat0)), tuple(map(float, times)), dps)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _closed_cached(moments, omega0, quat0, times, dps):
     with mp.workdps(dps):
         I, w, L2, E2, lam, m, amp, forms, ref = _setup(moments, omega0)
