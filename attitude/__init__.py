@@ -18,6 +18,7 @@ from . import (
     torques,  # noqa: F401  (att.torques.GravityGradient, ...)
 )
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
+from .classify import Classification, classify
 from .ephemeris import Ephemeris
 from .errors import (
     AttitudeError,
@@ -46,6 +47,8 @@ __all__ = [
     "torques",
     "propagate",
     "diagnose",
+    "classify",
+    "Classification",
     "INERTIAL_FRAMES",
     "SYMMETRY_RTOL",
     "TRIANGLE_RTOL",

@@ -37,6 +37,7 @@ Rotation-state analysis of spacecraft and small bodies.
   attitude run scenarios/apophis.toml      propagate a scenario, print a summary,
                                            write the netCDF ephemeris
   attitude run FILE.toml --report R.json   also write a JSON report
+  attitude classify scenarios/apophis.nc   regime, periods, margin, confidence
   attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML
 
 Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed.
@@ -138,6 +139,33 @@ def _cmd_convert(args) -> int:
     return EXIT_OK
 
 
+_CLASSIFY_HELP = """\
+Classify the rotation in an ephemeris file (netCDF, as written by 'attitude run'): the
+regime (PA-short, PA-long, SAM, LAM, separatrix, axisymmetric, spherical, at-rest), the
+measured periods, the margin to the nearest regime boundary, a confidence, and the
+regime over time in sliding windows for perturbed runs.  See docs/diagnostics.md.
+
+  attitude run scenarios/apophis.toml
+  attitude classify scenarios/apophis.nc
+  attitude classify scenarios/apophis.nc --json
+"""
+
+
+def _cmd_classify(args) -> int:
+    from .classify import classification_json, classify, format_classification
+    from .ephemeris import Ephemeris
+
+    result = classify(Ephemeris.from_netcdf(args.ephemeris))
+    results = result if isinstance(result, list) else [result]
+    if args.json:
+        docs = [classification_json(c) for c in results]
+        print(json.dumps(docs if isinstance(result, list) else docs[0], indent=2,
+                         default=float))
+    else:
+        print("\n\n".join(format_classification(c) for c in results))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="attitude", description=_MAIN_HELP,
@@ -152,6 +180,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
     run.add_argument("--quiet", action="store_true", help="print nothing on success")
     run.set_defaults(func=_cmd_run)
+
+    cls = sub.add_parser("classify", help="classify the rotation in an ephemeris file",
+                         description=_CLASSIFY_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    cls.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
+    cls.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    cls.set_defaults(func=_cmd_classify)
 
     conv = sub.add_parser("convert", help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml",
                           description=_CONVERT_HELP,

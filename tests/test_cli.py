@@ -92,3 +92,26 @@ def test_convert_bad_input_exits_2(tmp_path):
     assert proc.returncode == 2 and "line 1" in proc.stderr and "Traceback" not in proc.stderr
     proc = attitude("convert", tmp_path / "missing.nc", tmp_path / "x.aem")
     assert proc.returncode == 2 and "no such file" in proc.stderr
+
+
+def test_classify_prints_table_and_json(tmp_path):
+    nc = tmp_path / "a.nc"
+    fine = GOOD.replace('step = "10 s"', 'step = "0.5 s"')   # 10 deg per sample
+    assert attitude("run", write(tmp_path, fine), "-o", nc, "--quiet").returncode == 0
+    proc = attitude("classify", nc)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split()[:2] == ["regime", "SAM"]
+    proc = attitude("classify", nc, "--json")
+    data = json.loads(proc.stdout)
+    assert data["regime"] == "SAM" and set(data["periods"]) >= {"polhode", "precession"}
+
+
+def test_classify_bad_files_exit_2(tmp_path):
+    proc = attitude("classify", tmp_path / "missing.nc")
+    assert proc.returncode == 2 and "no such file" in proc.stderr
+    short = tmp_path / "short.nc"
+    text = GOOD.replace('duration = "2 min"', 'duration = "20 s"')
+    assert attitude("run", write(tmp_path, text), "-o", short, "--quiet").returncode == 0
+    proc = attitude("classify", short)      # far less than one polhode cycle
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
