@@ -1,8 +1,9 @@
 """``propagate``: one entry point for every propagator.
 
 Without torques the exact Euler–Poinsot solution is used (:mod:`attitude.torquefree`);
-with torques, or with ``method="integrator"``, the numerical integrator
-(:mod:`attitude.integrate`).
+with torques the splitting integrator (:mod:`attitude.splitting`: exact free flow and
+torque kicks, 4th order by default), or, with ``method="integrator"`` (or an ``rtol``),
+the DOP853 reference integrator (:mod:`attitude.integrate`).
 """
 
 from __future__ import annotations
@@ -22,8 +23,9 @@ from .state import AttitudeState
 
 __all__ = ["propagate", "METHODS", "elapsed_seconds"]
 
-#: ``method=`` values: the closed form (no torques) or the reference integrator.
-METHODS = ("exact", "integrator")
+#: ``method=`` values: the closed form (no torques), the splitting integrator (exact
+#: free flow + torque kicks; the default with torques) or the DOP853 reference integrator.
+METHODS = ("exact", "splitting", "integrator")
 
 
 def elapsed_seconds(times, epoch: Time) -> np.ndarray:
@@ -85,7 +87,9 @@ def _as_batch(body, state) -> tuple[list[RigidBody], list[AttitudeState], bool]:
 
 def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
               Sequence[AttitudeState], times, *, torques: Sequence | None = None,
-              method: str | None = None, rtol: float | None = None) -> Ephemeris:
+              method: str | None = None, rtol: float | None = None,
+              step: float | u.Quantity | None = None, order: int | None = None,
+              progress: bool = False) -> Ephemeris:
     """Propagate the rotation of one body, or of a batch of bodies, to ``times``.
 
     Parameters
@@ -94,11 +98,28 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
     state : AttitudeState or sequence of AttitudeState (same length, same epoch and frame)
     times : array-like (s since the epoch), Quantity, or astropy Time array
     torques : sequence of torque models, optional
-        Callables ``torque(t, quaternion, omega_body, body) -> (3,)`` body-frame N m.
-    method : {"exact", "integrator"}, optional
-        Default: ``"exact"`` without torques, ``"integrator"`` with them.
+        Callables ``torque(t, quaternion, omega_body, body) -> (3,)`` body-frame N m
+        (:mod:`attitude.torques`).
+    method : {"exact", "splitting", "integrator"}, optional
+        ``"exact"``: the closed-form torque-free solution.  ``"splitting"``: the exact
+        free flow composed with torque kicks (:func:`attitude.splitting.integrate_splitting`;
+        symplectic for attitude-only torques, a whole batch in one vectorised run).
+        ``"integrator"``: DOP853 on Euler's equations (the reference; one body at a
+        time).  Default: ``"exact"`` without torques; with torques ``"splitting"``,
+        or ``"integrator"`` if ``rtol`` is given.
     rtol : float, optional
-        Relative tolerance of the integrator.
+        Relative tolerance of the ``"integrator"`` method (default 1e-13).
+    step : float (s) or time Quantity, optional
+        Longest step of the ``"splitting"`` method; default
+        :func:`attitude.splitting.choose_step` (a fixed fraction of the fastest time
+        scale: spin, libration, orbit, damping).  Output times are always hit exactly.
+    order : {2, 4, 6}, optional
+        Order of the ``"splitting"`` method (default 4).
+    progress : bool
+        Progress bar for the ``"splitting"`` method (off by default).
+
+    ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol``
+    only by ``"integrator"``; the exact solution ignores them.
 
     Returns
     -------
@@ -120,17 +141,31 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
     t = elapsed_seconds(times, states[0].epoch)
     torques = list(torques or [])
     if method is None:
-        method = "integrator" if torques else "exact"
+        if rtol is not None and (step is not None or order is not None):
+            raise InvalidStateError("rtol= belongs to method='integrator', step= and "
+                                    "order= to method='splitting': give one of them, or "
+                                    "choose the method")
+        if not torques:
+            method = "exact"
+        else:
+            method = "integrator" if rtol is not None else "splitting"
     if method not in METHODS:
         raise InvalidStateError(f"method {method!r} is unknown; choose one of {METHODS}")
     if method == "exact" and torques:
         raise InvalidStateError("method='exact' is the torque-free solution; use "
-                                "method='integrator' with torques")
+                                "method='splitting' or method='integrator' with torques")
+    if step is not None:
+        step = _step_seconds(step)
 
     q0 = np.stack([s.attitude.as_quat() for s in states])             # body -> inertial
     w0 = np.stack([s.omega_body for s in states])
     if method == "exact":
         q, w = _exact(bodies, q0, w0, t)
+    elif method == "splitting":
+        from .splitting import integrate_splitting
+
+        q, w = integrate_splitting(bodies, q0, w0, t, torques=torques, step=step,
+                                   order=4 if order is None else order, progress=progress)
     else:
         kwargs = {} if rtol is None else {"rtol": rtol}
         results = [integrate_reference(b, q0[i], w0[i], t, torques=torques, **kwargs)
@@ -143,7 +178,31 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
     return Ephemeris.from_arrays(
         t, q, w, body=bodies, epoch=states[0].epoch, frame=states[0].frame,
         title=f"attitude ephemeris{': ' + name if name else ''}",
-        source=f"attitude.propagate, method={method}")
+        source=f"attitude.propagate, method={method}{_DESCRIPTION[method]}")
+
+
+_DESCRIPTION = {
+    "exact": " (closed-form Euler-Poinsot solution)",
+    "splitting": " (splitting integrator: exact free flow and torque kicks)",
+    "integrator": " (DOP853 reference integrator)",
+}
+
+
+def _step_seconds(step) -> float:
+    """``step=`` as float seconds (a number or a time Quantity)."""
+    if isinstance(step, u.Quantity):
+        try:
+            step = step.to_value(u.s)
+        except u.UnitConversionError:
+            raise InvalidStateError(f"step: unit '{step.unit}' is not a time unit") from None
+    try:
+        value = float(step)
+    except (TypeError, ValueError):
+        raise InvalidStateError(f"step: expected seconds or a time Quantity, got "
+                                f"{step!r}") from None
+    if not (value > 0 and np.isfinite(value)):
+        raise InvalidStateError(f"step: expected a positive, finite step, got {step!r}")
+    return value
 
 
 def _exact(bodies: list[RigidBody], q0: np.ndarray, w0: np.ndarray, t: np.ndarray):
