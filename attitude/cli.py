@@ -75,6 +75,7 @@ def _summary(result) -> str:
     A, B, C = body.principal_moments
     w = state.omega_body
     wn = math.degrees(float((w @ w) ** 0.5))
+    method = sc.method or ("splitting" if sc.torques else "exact")
     lines = [
         f"Scenario   {sc.name}  ({sc.path})",
         f"Body       A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 ({body.symmetry})"
@@ -82,13 +83,26 @@ def _summary(result) -> str:
         f"State      epoch {state.epoch.isot} {state.epoch.scale.upper()}, frame {state.frame},"
         f" |omega| = {wn:.6g} deg/s",
         f"Run        {len(eph)} epochs over {_format_seconds(sc.duration)}, step "
-        f"{_format_seconds(sc.step)}, method {sc.method or 'exact'}",
+        f"{_format_seconds(sc.step)}, method {method}",
     ]
-    if d is not None:
-        periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in d.periods.items())
-        which = " (initial state, torque-free)" if sc.torques else ""
-        lines.append(f"Motion     regime{which} {d.regime}"
-                     + (f"; periods: {periods}" if periods else ""))
+    periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in result.periods.items())
+    if sc.torques:
+        lines.append(f"Motion     initial state (torque-free): {d.regime}")
+        c = result.classification
+        if c is None:
+            lines.append(f"Classified {result.note}")
+        else:
+            extra = ""
+            if c.lyapunov is not None and c.lyapunov.lyapunov_time is not None and \
+                    math.isfinite(c.lyapunov.lyapunov_time):
+                extra = f"; Lyapunov time {_format_seconds(c.lyapunov.lyapunov_time)}"
+            lines.append(f"Classified regime {c.regime} (confidence {c.confidence:.2f})"
+                         + (f"; periods: {periods}" if periods else "") + extra)
+            if len(c.segments) > 1:
+                lines.append("Segments   " + " -> ".join(
+                    f"{reg} from {_format_seconds(start)}" for start, _, reg in c.segments))
+    else:
+        lines.append(f"Motion     regime {d.regime}" + (f"; periods: {periods}" if periods else ""))
     c = result.conservation
     lines.append(f"Conserved  |L| = {d.angular_momentum:.10g} kg m^2/s (max rel. drift "
                  f"{c['angular_momentum_rel_drift']:.2g}), E = {d.kinetic_energy:.10g} J "

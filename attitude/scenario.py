@@ -367,27 +367,44 @@ CONSERVATION_KEYS = ("angular_momentum_rel_drift", "energy_rel_drift")
 
 @dataclass(frozen=True, eq=False)
 class RunResult:
-    """What a scenario run produced: the ephemeris, the analytic diagnosis, the
-    conservation figures, the expectation outcomes and the files written."""
+    """What a scenario run produced: the ephemeris, the analytic diagnosis of the initial
+    state, the classification of the ephemeris (runs with torques), the conservation
+    figures, the expectation outcomes and the files written."""
 
     scenario: Scenario
     ephemeris: Any
     diagnosis: Any
+    classification: Any
     conservation: dict
     expectations: list
     outputs: list
+    note: str = ""
 
     @property
     def ok(self) -> bool:
         return all(e["ok"] for e in self.expectations)
 
+    @property
+    def regime(self) -> str | None:
+        """The analytic regime of a torque-free run; the classified regime (including
+        ``chaotic``) of a run with torques."""
+        if not self.scenario.torques:
+            return self.diagnosis.regime
+        return self.classification.regime if self.classification is not None else None
+
+    @property
+    def periods(self) -> dict:
+        """Analytic periods of a torque-free run; measured periods of a run with torques."""
+        if not self.scenario.torques:
+            return dict(self.diagnosis.periods)
+        return dict(self.classification.periods) if self.classification is not None else {}
+
     def report(self) -> dict:
         """The ``--report`` JSON document (API.md)."""
-        d = self.diagnosis
         return {
             "scenario": self.scenario.name,
-            "regime": d.regime if d is not None else None,
-            "periods": dict(d.periods) if d is not None else {},
+            "regime": self.regime,
+            "periods": self.periods,
             "conservation": self.conservation,
             "expect": self.expectations,
             "outputs": [str(p) for p in self.outputs],
@@ -395,20 +412,37 @@ class RunResult:
 
 
 def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None) -> RunResult:
-    """Propagate a scenario, check its ``[expect]`` table and write its outputs."""
+    """Propagate a scenario, classify it, check its ``[expect]`` table, write outputs.
+
+    A torque-free run is described by the analytic :func:`attitude.diagnose` of its
+    initial state.  A run with torques is classified from its ephemeris by
+    :func:`attitude.classify` with the finite-time Lyapunov test (``chaotic``), so its
+    regime and periods are measured ones.
+    """
+    from .classify import classify
+    from .diagnostics import DiagnosticsError
     from .propagate import propagate
     from .torquefree import diagnose
 
+    torques = list(scenario.torques)
     eph = propagate(scenario.body, scenario.state, scenario.times, method=scenario.method,
-                    rtol=scenario.rtol, torques=list(scenario.torques))
+                    rtol=scenario.rtol, torques=torques)
     diagnosis = diagnose(scenario.body, scenario.state)
+    classification, note = None, ""
+    if torques:
+        try:
+            classification = classify(eph, chaos=True, torques=torques,
+                                      require_periods=False)
+        except (DiagnosticsError, AttitudeError) as exc:
+            note = f"not classified: {exc}"
     conservation = eph.conservation()
-    expectations = check_expectations(scenario, diagnosis, conservation)
-    outputs = []
+    result = RunResult(scenario, eph, diagnosis, classification, conservation, [], [], note)
+    result.expectations.extend(check_expectations(scenario, result.regime, result.periods,
+                                                  conservation))
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
     if target is not None:
-        outputs.append(eph.to_netcdf(target))
-    return RunResult(scenario, eph, diagnosis, conservation, expectations, outputs)
+        result.outputs.append(eph.to_netcdf(target))
+    return result
 
 
 def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
@@ -454,17 +488,18 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
     return tuple(parsed)
 
 
-def check_expectations(scenario: Scenario, diagnosis, conservation: dict) -> list[dict]:
+def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
+                       conservation: dict) -> list[dict]:
     """Compare the parsed ``[expect]`` entries with what the run gave."""
     results = []
     for spec in scenario.expect:
         key = spec["key"]
         out = dict(spec)
         if key == "regime":
-            out["got"] = diagnosis.regime
-            out["ok"] = diagnosis.regime == spec["expected"]
+            out["got"] = regime
+            out["ok"] = regime == spec["expected"]
         elif key in PERIOD_KEYS:
-            got = diagnosis.periods.get(key)
+            got = periods.get(key)
             out["got"] = None if got is None else got / u.Unit(spec["unit"]).to(u.s)
             out["ok"] = bool(got is not None and
                              abs(out["got"] - spec["expected"]) <= spec["tolerance"])
