@@ -533,6 +533,8 @@ def _segment_ops(ops: tuple, n: int):
 
 
 def _resolve_scheme(order, scheme, attitude_only: bool = False) -> tuple[str, int, tuple]:
+    if scheme is None and order is None:
+        order = 4
     if scheme is None:
         if order not in DEFAULT_SCHEME:
             raise InvalidStateError(f"order={order!r} is not available; choose one of "
@@ -999,7 +1001,7 @@ def _count(dt: float, h_max: float) -> int:
 
 
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
-                        order: int | None = 4, scheme: str | None = None,
+                        order: int | None = None, scheme: str | None = None,
                         progress: bool = False, steps_per_period: float | None = None
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Propagate rigid bodies under torques with a splitting method.
@@ -1030,9 +1032,9 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         :class:`~attitude.body.RigidBody` (like the reference integrator).
     step : float, optional
         Longest step, s.  Default: :func:`choose_step`.
-    order : {2, 4, 6}
-        Order of the composition (default 4).  Ignored when ``scheme`` is given
-        (pass ``order=None``) or checked against it.
+    order : {2, 4, 6}, optional
+        Order of the composition (default 4, or that of ``scheme``; if both are given
+        they must agree).
     scheme : str, optional
         One of :data:`SCHEMES` (default :data:`DEFAULT_SCHEME` of the order).
     progress : bool
@@ -1121,11 +1123,11 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
             else:
                 q, w = q_p0.copy(), w_p0.copy()
             t_now = 0.0
+            cached = None          # attitude-only acceleration at the current (t, q)
             for j, steps in zip(idx, counts):
                 if steps:
                     h = (t[j] - t_now) / steps
                     acc = 0.0
-                    cached = None
                     nf = 0
                     for kind, cc in _segment_ops(ops_step, steps):
                         if kind == "F":
