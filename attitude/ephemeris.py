@@ -41,6 +41,30 @@ QUATERNION_CONVENTION = "scalar-last, body-to-inertial"
 _REQUIRED_VARIABLES = ("quaternion", "angular_velocity")
 _REQUIRED_ATTRS = ("epoch", "time_scale", "frame")
 
+#: Attributes of the ``time`` coordinate.  API.md fixes ``units = "s"`` (seconds since the
+#: ``epoch`` global attribute), which is a duration, not a CF reference-time unit
+#: (``s since ...``); the variable is therefore deliberately *not* declared a CF time axis
+#: (no ``axis = "T"``, no ``standard_name = "time"``: either makes CF 4.4 require a
+#: reference time in ``units``).  The reference epoch is carried in the ``epoch`` global
+#: attribute and repeated on the variable (``reference_epoch``, ``time_scale``).
+_TIME_ATTRS = {"units": "s", "long_name": "time elapsed since the reference epoch",
+               "comment": "seconds since the epoch given by the reference_epoch attribute "
+                          "(and the epoch global attribute), in the time_scale time scale"}
+
+#: String labels.  In the netCDF file they are written as CF label variables (char arrays
+#: named ``<dim>_label``, CF 6.1), not as string coordinate variables: CF 1.3 requires a
+#: coordinate variable to be numeric and monotonic.  :meth:`Ephemeris.from_netcdf` maps
+#: them back to the in-memory coordinates of API.md.
+_LABEL_ATTRS = {
+    "quaternion_component": {"long_name": "quaternion component (x, y, z vector part; "
+                                          "w scalar part)"},
+    "axis": {"long_name": "Cartesian axis of the vector components"},
+    "body_name": {"long_name": "name of the body"},
+}
+_LABEL_SUFFIX = "_label"
+_CHUNK_TIME = 8192        # samples per chunk along time in the netCDF file
+_COMPLEVEL = 4
+
 
 def _version() -> str:
     from . import __version__
@@ -154,10 +178,11 @@ class Ephemeris:
                     "long_name": "rotational kinetic energy", "units": "J"}),
             },
             coords={
-                "time": ("time", time, {"units": "s", "long_name": "time since epoch",
-                                        "axis": "T"}),
-                "quaternion_component": ("quaternion_component", ["x", "y", "z", "w"]),
-                "axis": ("axis", ["x", "y", "z"]),
+                "time": ("time", time, _TIME_ATTRS | {"reference_epoch": attrs["epoch"],
+                                                      "time_scale": attrs["time_scale"]}),
+                "quaternion_component": ("quaternion_component", ["x", "y", "z", "w"],
+                                         _LABEL_ATTRS["quaternion_component"]),
+                "axis": ("axis", ["x", "y", "z"], _LABEL_ATTRS["axis"]),
             },
             attrs=attrs,
         )
@@ -168,8 +193,10 @@ class Ephemeris:
             ds["principal_moments"] = (("body", "moment"), np.stack(
                 [b.principal_moments for b in bodies]), {
                 "long_name": "principal moments of inertia A <= B <= C", "units": "kg m2"})
-            ds = ds.assign_coords(body=("body", np.arange(len(bodies))),
-                                  body_name=("body", [b.name for b in bodies]))
+            ds = ds.assign_coords(
+                body=("body", np.arange(len(bodies)), {"long_name": "body index",
+                                                       "units": "1"}),
+                body_name=("body", [b.name for b in bodies], _LABEL_ATTRS["body_name"]))
         return cls(ds)
 
     # --- views ---------------------------------------------------------------------
@@ -261,14 +288,16 @@ class Ephemeris:
 
     # --- files ---------------------------------------------------------------------
     def to_netcdf(self, path: str | PathLike) -> Path:
-        """Write a netCDF-4 file atomically (temporary file in the same folder, then
-        rename): a crash never leaves a truncated ephemeris.  Returns the path."""
+        """Write a CF-1.10 netCDF-4 file atomically (temporary file in the same folder,
+        then rename): a crash never leaves a truncated ephemeris.  ``time`` is an unlimited
+        dimension; float variables are chunked (:data:`_CHUNK_TIME` samples along time)
+        and zlib-compressed.  Returns the path."""
         path = Path(path)
-        encoding = {name: {"_FillValue": None, "zlib": True, "complevel": 4}
-                    for name, var in self._dataset.variables.items()
-                    if var.dtype.kind == "f"}
-        return write_atomically(path, lambda tmp: self._dataset.to_netcdf(
-            tmp, engine="netcdf4", format="NETCDF4", encoding=encoding))
+        ds = _to_file_dataset(self._dataset)
+        encoding = _file_encoding(ds)
+        return write_atomically(path, lambda tmp: ds.to_netcdf(
+            tmp, engine="netcdf4", format="NETCDF4", encoding=encoding,
+            unlimited_dims=("time",)))
 
     @classmethod
     def from_netcdf(cls, path: str | PathLike) -> Ephemeris:
@@ -282,10 +311,63 @@ class Ephemeris:
                 ds = ds.load()
         except (OSError, ValueError) as exc:
             raise EphemerisFormatError(f"{path}: not a readable netCDF file ({exc})") from None
-        for name in ("quaternion_component", "axis", "body_name"):
-            if name in ds.coords and ds[name].dtype == object:
-                ds = ds.assign_coords({name: ds[name].astype(str)})
+        ds = _from_file_dataset(ds)
         return cls(ds)
+
+
+def _to_file_dataset(ds: xr.Dataset) -> xr.Dataset:
+    """The in-memory dataset as written to netCDF: string coordinates of a dimension become
+    CF label variables ``<dim>_label`` (char arrays, CF 6.1)."""
+    for dim in ("quaternion_component", "axis"):
+        if dim in ds.coords and ds[dim].dtype.kind in "UOS":
+            labels = ds[dim]
+            ds = ds.drop_vars(dim).assign_coords(
+                {dim + _LABEL_SUFFIX: (dim, labels.values.astype(str), labels.attrs)})
+    return ds
+
+
+def _from_file_dataset(ds: xr.Dataset) -> xr.Dataset:
+    """Inverse of :func:`_to_file_dataset` (also accepts files with string coordinates)."""
+    for dim in ("quaternion_component", "axis"):
+        label = dim + _LABEL_SUFFIX
+        if label in ds.variables and dim not in ds.variables:
+            attrs = dict(ds[label].attrs)
+            ds = ds.drop_vars(label).assign_coords(
+                {dim: (dim, _as_str(ds[label].values), attrs)})
+    for name in ("quaternion_component", "axis", "body_name"):
+        if name in ds.coords and ds[name].dtype.kind in "OS":
+            ds = ds.assign_coords({name: (ds[name].dims, _as_str(ds[name].values),
+                                          ds[name].attrs)})
+    return ds
+
+
+def _as_str(values) -> np.ndarray:
+    return np.array([v.decode() if isinstance(v, bytes) else str(v) for v in values])
+
+
+def _file_encoding(ds: xr.Dataset, time_chunk: int | None = None) -> dict:
+    """Chunked, zlib-compressed float variables (no fill value); strings as char arrays.
+    ``time_chunk``: samples per chunk along ``time`` (default: the length, at most
+    :data:`_CHUNK_TIME`)."""
+    encoding = {}
+    for name, var in ds.variables.items():
+        if var.dtype.kind == "f":
+            encoding[name] = {"_FillValue": None}
+            if var.ndim:
+                encoding[name].update(zlib=True, complevel=_COMPLEVEL, shuffle=True,
+                                      chunksizes=_chunks(var.dims, var.shape, time_chunk))
+        elif var.dtype.kind in "UO":
+            encoding[name] = {"dtype": "S1"}
+    return encoding
+
+
+def _chunks(dims, shape, time_chunk: int | None = None) -> tuple[int, ...]:
+    def size(d, n):
+        if d == "time":
+            return time_chunk or max(1, min(n, _CHUNK_TIME))
+        return 1 if d == "body" else n
+
+    return tuple(size(d, n) for d, n in zip(dims, shape))
 
 
 def write_atomically(path: Path, write) -> Path:

