@@ -9,7 +9,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+import time
+import tomllib
 from pathlib import Path
 
 from . import __version__
@@ -29,6 +32,11 @@ see docs/scenarios.md.  For example:
   attitude run scenarios/apophis.toml -o /tmp/apophis.nc --report /tmp/apophis.json
 
 The netCDF ephemeris goes to [output].netcdf (relative to the scenario file), or to -o.
+With --plot the figures (polhode, herpolhode, body axes, Euler angles, and the regime
+over time for runs with torques) are written as PNG next to it, e.g.
+scenarios/apophis_polhode.png (needs matplotlib: pip install 'attitude[plot]'):
+
+  attitude run scenarios/apophis.toml --plot
 """
 
 _MAIN_HELP = """\
@@ -37,6 +45,8 @@ Rotation-state analysis of spacecraft and small bodies.
   attitude run scenarios/apophis.toml      propagate a scenario, print a summary,
                                            write the netCDF ephemeris
   attitude run FILE.toml --report R.json   also write a JSON report
+  attitude check scenarios/                run every scenario with an [expect] table
+                                           and compare (what CI runs)
   attitude classify scenarios/apophis.nc   regime, periods, margin, confidence
   attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML
 
@@ -114,11 +124,30 @@ def _summary(result) -> str:
     return "\n".join(lines)
 
 
+def _plot_stem(args, result) -> Path:
+    """Where ``--plot`` writes: next to the netCDF output, else next to the scenario."""
+    target = result.outputs[0] if result.outputs else result.scenario.path
+    return Path(target).with_suffix("")
+
+
 def _cmd_run(args) -> int:
     from .scenario import load_scenario, run_scenario
 
+    if args.plot:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            print(f"attitude: error: {args.scenario}: --plot needs matplotlib; install it "
+                  "with pip install 'attitude[plot]'", file=sys.stderr)
+            return EXIT_INPUT
     scenario = load_scenario(args.scenario)
     result = run_scenario(scenario, netcdf=args.output)
+    if args.plot:
+        from .plot import save_figures
+
+        result.outputs.extend(save_figures(result.ephemeris, _plot_stem(args, result),
+                                           result.classification,
+                                           regime=result.classification is not None))
     if args.report:
         from .ephemeris import write_atomically
 
@@ -127,6 +156,141 @@ def _cmd_run(args) -> int:
     if not args.quiet:
         print(_summary(result))
     return EXIT_OK if result.ok else EXIT_EXPECTATION
+
+
+_CHECK_HELP = """\
+Run every scenario that has an [expect] table and compare what it gives with what it
+expects: one line per expectation (scenario, key, expected, tolerance, got, pass/FAIL),
+then 'N passed, M failed'.  PATH is a scenario file or a folder (searched recursively for
+*.toml; files without [expect] are skipped).  Scenarios run in parallel, one per core.
+No output files are written.  Put it in your CI:
+
+  attitude check scenarios/
+  attitude check scenarios/apophis.toml my_study/ --jobs 2
+
+In a scenario file:
+
+  [expect]
+  regime = "SAM"
+  precession = { value = 27.38, unit = "h", rel_tol = 0.003 }
+  energy_rel_drift = { max = 1e-13 }
+
+Exit codes: 0 all passed, 1 an expectation failed, 2 a file is malformed or missing (the
+other files are still checked and reported), 3 a propagation failed.
+"""
+
+
+def _check_targets(paths) -> tuple[list[Path], list[str]]:
+    """Scenario files named by ``paths`` (files, or folders searched for ``*.toml``)."""
+    files, errors = [], []
+    for p in map(Path, paths):
+        if p.is_dir():
+            found = sorted(f for f in p.rglob("*.toml") if f.is_file())
+            if not found:
+                errors.append(f"{p}: no *.toml scenario files in this folder")
+            files.extend(found)
+        elif p.is_file():
+            files.append(p)
+        else:
+            errors.append(f"{p}: no such file or folder")
+    return list(dict.fromkeys(files)), errors
+
+
+def _check_one(path: str) -> dict:
+    """Run one scenario for ``attitude check`` (in a worker process): a plain dict."""
+    from .scenario import load_scenario, run_scenario
+
+    start = time.perf_counter()
+    out = {"path": path, "status": "ok", "expect": [], "message": ""}
+    try:
+        with open(path, "rb") as fh:
+            has_expect = isinstance(tomllib.load(fh).get("expect"), dict)
+    except (OSError, tomllib.TOMLDecodeError):
+        has_expect = True          # let load_scenario report it in its own words
+    if not has_expect:
+        out["status"] = "skipped"
+        return out
+    try:
+        result = run_scenario(load_scenario(path), write_outputs=False)
+    except PropagationError as exc:
+        out.update(status="propagation", message=str(exc))
+    except (AttitudeError, OSError, ValueError) as exc:
+        out.update(status="input", message=str(exc))
+    except Exception as exc:  # noqa: BLE001 - a bug: report it, keep checking the others
+        out.update(status="propagation",
+                   message=f"{path}: internal error: {type(exc).__name__}: {exc}")
+    else:
+        out["name"] = result.scenario.name
+        out["expect"] = [{k: v for k, v in e.items()} for e in result.expectations]
+    if out["message"] and path not in out["message"]:
+        out["message"] = f"{path}: {out['message']}"
+    out["seconds"] = time.perf_counter() - start
+    return out
+
+
+def _check_line(path: str, e: dict) -> str:
+    """``pass  scenarios/apophis.toml  precession: expected 27.38 +/- 0.0821 h, got ...``"""
+    status = "pass" if e["ok"] else "FAIL"
+    return f"{status}  {path}  " + _expectation_line(e).split(" ", 1)[1].lstrip()
+
+
+def _default_jobs() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _cmd_check(args) -> int:
+    files, errors = _check_targets(args.paths)
+    for message in errors:
+        print(f"attitude: error: {message}", file=sys.stderr)
+    jobs = args.jobs or _default_jobs()
+    if jobs < 1:
+        print("attitude: error: --jobs: must be at least 1", file=sys.stderr)
+        return EXIT_INPUT
+    start = time.perf_counter()
+    names = [str(f) for f in files]
+    if jobs == 1 or len(names) <= 1:
+        results = map(_check_one, names)
+        pool = None
+    else:
+        from concurrent.futures import ProcessPoolExecutor
+
+        pool = ProcessPoolExecutor(max_workers=min(jobs, len(names)))
+        results = pool.map(_check_one, names)
+    passed = failed = checked = 0
+    worst = EXIT_INPUT if errors else EXIT_OK
+    try:
+        for res in results:     # in the order given, each as soon as it is done
+            if res["status"] == "skipped":
+                continue
+            checked += 1
+            if res["status"] != "ok":
+                print(f"attitude: error: {res['message']}", file=sys.stderr)
+                print(f"ERROR {res['path']}: {res['message']}")
+                code = EXIT_INPUT if res["status"] == "input" else EXIT_PROPAGATION
+                worst = EXIT_INPUT if EXIT_INPUT in (worst, code) else max(worst, code)
+                continue
+            for e in res["expect"]:
+                print(_check_line(res["path"], e))
+                passed += e["ok"]
+                failed += not e["ok"]
+            if args.times:
+                print(f"time  {res['path']}  {res['seconds']:.2f} s")
+            sys.stdout.flush()
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    if checked == 0 and not errors:
+        print("attitude: error: no scenario with an [expect] table in "
+              + ", ".join(args.paths), file=sys.stderr)
+        return EXIT_INPUT
+    print(f"{passed} passed, {failed} failed ({checked} scenarios in "
+          f"{time.perf_counter() - start:.1f} s)")
+    if worst != EXIT_OK:
+        return worst
+    return EXIT_EXPECTATION if failed else EXIT_OK
 
 
 _CONVERT_HELP = """\
@@ -193,7 +357,20 @@ def build_parser() -> argparse.ArgumentParser:
                      help="netCDF ephemeris path (overrides [output].netcdf)")
     run.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
     run.add_argument("--quiet", action="store_true", help="print nothing on success")
+    run.add_argument("--plot", action="store_true",
+                     help="write the figures as PNG next to the output (needs matplotlib)")
     run.set_defaults(func=_cmd_run)
+
+    chk = sub.add_parser("check", help="run scenarios and compare with their [expect] tables",
+                         description=_CHECK_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    chk.add_argument("paths", nargs="+", metavar="PATH",
+                     help="scenario file or folder of *.toml files")
+    chk.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+                     help="scenarios run at once (default: the number of available cores)")
+    chk.add_argument("--times", action="store_true",
+                     help="also print the run time of each scenario")
+    chk.set_defaults(func=_cmd_check)
 
     cls = sub.add_parser("classify", help="classify the rotation in an ephemeris file",
                          description=_CLASSIFY_HELP,

@@ -411,13 +411,15 @@ class RunResult:
         }
 
 
-def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None) -> RunResult:
+def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
+                 write_outputs: bool = True) -> RunResult:
     """Propagate a scenario, classify it, check its ``[expect]`` table, write outputs.
 
     A torque-free run is described by the analytic :func:`attitude.diagnose` of its
     initial state.  A run with torques is classified from its ephemeris by
     :func:`attitude.classify` with the finite-time Lyapunov test (``chaotic``), so its
-    regime and periods are measured ones.
+    regime and periods are measured ones.  ``write_outputs=False`` writes no file (what
+    ``attitude check`` does).
     """
     from .classify import classify
     from .diagnostics import DiagnosticsError
@@ -440,7 +442,7 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None) -> Run
     result.expectations.extend(check_expectations(scenario, result.regime, result.periods,
                                                   conservation))
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
-    if target is not None:
+    if target is not None and write_outputs:
         result.outputs.append(eph.to_netcdf(target))
     return result
 

@@ -1,0 +1,322 @@
+r"""Figures of an attitude ephemeris (matplotlib, the optional extra ``plot``).
+
+Each function takes an :class:`~attitude.ephemeris.Ephemeris` (one body) and returns a
+:class:`matplotlib.figure.Figure`; nothing is shown or saved (``fig.savefig(...)``).
+
+* :func:`polhode` - the Binet construction: the angular velocity on the energy ellipsoid
+  ``omega . I omega = 2E`` and the body-frame angular momentum on the sphere ``|L| = L``
+  cut by the ellipsoid ``L_A^2/A + L_B^2/B + L_C^2/C = 2E``, with the separatrix.
+* :func:`herpolhode` - the tip of ``omega`` on the invariable plane (normal to ``L``).
+* :func:`body_axes` - the principal axes on the inertial unit sphere over time.
+* :func:`euler_angles` - precession ``phi``, nutation ``theta``, rotation ``psi`` (3-1-3 in
+  the angular-momentum frame, :func:`attitude.diagnostics.momentum_frame_angles`) and their
+  rates against time.
+* :func:`regime_timeline` - the time-resolved regime (``classify(eph).segments``) and the
+  excitation ``L^2 / (2 E B)`` over time, for perturbed runs.
+
+:func:`figures` builds them all and :func:`save_figures` writes them as PNG (what
+``attitude run --plot`` does).  matplotlib is imported lazily; without it these functions
+raise :class:`PlotUnavailableError`.  For example::
+
+    import numpy as np, attitude as att
+    from scipy.spatial.transform import Rotation
+    from attitude.plot import polhode
+    body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    polhode(att.propagate(body, state, np.linspace(0, 3000, 1501))).savefig("p.png")
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .errors import AttitudeError
+
+__all__ = ["PlotUnavailableError", "polhode", "herpolhode", "body_axes", "euler_angles",
+           "regime_timeline", "figures", "save_figures", "FIGURES"]
+
+_AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")      # A (long), B, C (short)
+_REGIME_COLOURS = {"PA-short": "tab:blue", "PA-long": "tab:red", "SAM": "tab:cyan",
+                   "LAM": "tab:orange", "separatrix": "tab:purple",
+                   "axisymmetric": "tab:olive", "spherical": "tab:gray",
+                   "at-rest": "black", "chaotic": "tab:pink"}
+_MAX_POINTS = 4000
+
+
+class PlotUnavailableError(AttitudeError, ImportError):
+    """matplotlib is not installed (``pip install 'attitude[plot]'``)."""
+
+
+def _pyplot_free_figure(**kw):
+    """A Figure not registered with pyplot (no GUI, no global state): Agg canvas."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise PlotUnavailableError("plots need matplotlib: pip install 'attitude[plot]' "
+                                   "(or pip install matplotlib)") from None
+    fig = Figure(**kw)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _series(eph):
+    from .diagnostics import principal_series
+
+    if eph.is_batch:
+        raise AttitudeError("plots take one body: select it from the batch first")
+    return principal_series(eph)
+
+
+def _thin(n: int) -> slice:
+    return slice(None, None, max(1, int(np.ceil(n / _MAX_POINTS))))
+
+
+def _time_axis(t: np.ndarray) -> tuple[np.ndarray, str]:
+    span = float(t[-1] - t[0]) if t.size else 0.0
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if span >= 3 * size:
+            return t / size, unit
+    return t, "s"
+
+
+def _invariants(series):
+    I = series.moments
+    L = np.linalg.norm(series.omega * I, axis=-1)
+    E2 = np.einsum("ij,ij->i", series.omega, series.omega * I)   # 2E
+    return I, L, E2
+
+
+def _wire_ellipsoid(ax, semi, colour="0.75"):
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 37), np.linspace(0, np.pi, 19))
+    ax.plot_wireframe(semi[0] * np.cos(u) * np.sin(v), semi[1] * np.sin(u) * np.sin(v),
+                      semi[2] * np.cos(v), color=colour, linewidth=0.4)
+
+
+def _equal_3d(ax, r):
+    for setter in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
+        setter(-r, r)
+    ax.set_box_aspect((1, 1, 1))
+
+
+def polhode(eph):
+    """Binet construction: the polhode on the energy ellipsoid (``omega`` in principal
+    axes) and on the angular-momentum sphere (``L`` in principal axes), with the
+    separatrix on the sphere.  The surfaces are those of the initial state: for a run
+    with torques the curve leaves them as ``E`` and ``|L|`` change."""
+    series = _series(eph)
+    I, L, E2 = _invariants(series)
+    sl = _thin(series.time.size)
+    fig = _pyplot_free_figure(figsize=(11, 5.2))
+    t = series.time[sl]
+
+    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    semi = np.sqrt(E2[0] / I)                       # omega . I omega = 2E
+    _wire_ellipsoid(ax, semi)
+    w = series.omega[sl]
+    ax.scatter(w[:, 0], w[:, 1], w[:, 2], c=t, cmap="viridis", s=3)
+    ax.plot(w[:, 0], w[:, 1], w[:, 2], color="tab:red", linewidth=0.8)
+    _equal_3d(ax, float(semi.max()) * 1.05)
+    ax.set_xlabel(r"$\omega_A$ (rad/s)")
+    ax.set_ylabel(r"$\omega_B$")
+    ax.set_zlabel(r"$\omega_C$")
+    ax.set_title("polhode on the energy ellipsoid")
+
+    ax = fig.add_subplot(1, 2, 2, projection="3d")
+    Lb = series.momentum_body[sl]
+    r = float(L[0])
+    _wire_ellipsoid(ax, np.array([r, r, r]))
+    A, B, C = I
+    if C - A > 1e-9 * C and (1 / A - 1 / B) > 0 and (1 / B - 1 / C) > 0:
+        # separatrix: L_A^2 (1/A - 1/B) = L_C^2 (1/B - 1/C), two great circles through B
+        slope = np.sqrt((1 / A - 1 / B) / (1 / B - 1 / C))
+        s = np.linspace(0, 2 * np.pi, 361)
+        for sign in (1, -1):
+            n = np.array([1.0, 0.0, sign * slope]) / np.hypot(1.0, slope)
+            ax.plot(r * n[0] * np.cos(s), r * np.sin(s), r * n[2] * np.cos(s),
+                    color="tab:purple", linewidth=1.0, linestyle="--",
+                    label="separatrix" if sign == 1 else None)
+    ax.plot(Lb[:, 0], Lb[:, 1], Lb[:, 2], color="tab:red", linewidth=1.2, label="polhode")
+    for j, name in enumerate("ABC"):
+        e = np.zeros(3)
+        e[j] = 1.15 * r
+        ax.plot([0, e[0]], [0, e[1]], [0, e[2]], color=_AXIS_COLOURS[j], linewidth=1.5)
+        ax.text(*e, name, color=_AXIS_COLOURS[j])
+    _equal_3d(ax, r * 1.15)
+    ax.set_xlabel(r"$L_A$ (kg m$^2$/s)")
+    ax.set_ylabel(r"$L_B$")
+    ax.set_zlabel(r"$L_C$")
+    ax.set_title("polhode on the angular-momentum sphere")
+    ax.legend(loc="upper left", fontsize="small")
+    fig.suptitle(_title(eph, "Polhode (Binet construction)"))
+    return fig
+
+
+def herpolhode(eph):
+    """The herpolhode: the tip of the inertial ``omega`` projected on the invariable plane
+    (the plane normal to the initial angular momentum)."""
+    from ._quat import rotate
+    from .diagnostics import _momentum_frame_x
+
+    series = _series(eph)
+    Li = series.momentum_inertial
+    Z = Li[0] / np.linalg.norm(Li[0])
+    X = _momentum_frame_x(Z[None, :])[0]
+    Y = np.cross(Z, X)
+    wi = rotate(series.quaternion, series.omega)
+    sl = _thin(series.time.size)
+    x, y = wi[sl] @ X, wi[sl] @ Y
+    fig = _pyplot_free_figure(figsize=(6.4, 6.0))
+    ax = fig.add_subplot(1, 1, 1)
+    ax.plot(x, y, color="tab:blue", linewidth=0.8)
+    pts = ax.scatter(x, y, c=series.time[sl], cmap="viridis", s=4, zorder=3)
+    ax.plot([0], [0], marker="+", color="black", markersize=12)
+    ax.plot([x[0]], [y[0]], marker="o", color="tab:red", label="start")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(r"$\omega \cdot X$ (rad/s)")
+    ax.set_ylabel(r"$\omega \cdot Y$ (rad/s)")
+    ax.legend(loc="upper right", fontsize="small")
+    fig.colorbar(pts, ax=ax, label="time (s)")
+    ax.set_title(_title(eph, "Herpolhode on the invariable plane"))
+    return fig
+
+
+def body_axes(eph):
+    """The principal axes A, B, C (inertial frame) on the unit sphere over time, and the
+    direction of the angular momentum."""
+    from ._quat import rotate
+
+    series = _series(eph)
+    sl = _thin(series.time.size)
+    q = series.quaternion[sl]
+    fig = _pyplot_free_figure(figsize=(6.8, 6.4))
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    _wire_ellipsoid(ax, np.ones(3), colour="0.85")
+    for j, name in enumerate("ABC"):
+        e = np.zeros(3)
+        e[j] = 1.0
+        a = rotate(q, e)
+        ax.plot(a[:, 0], a[:, 1], a[:, 2], color=_AXIS_COLOURS[j], linewidth=0.8,
+                label=f"axis {name}")
+        ax.scatter(*a[0], color=_AXIS_COLOURS[j], s=30, marker="o")
+    Li = series.momentum_inertial[sl]
+    norm = np.linalg.norm(Li, axis=-1, keepdims=True)
+    Lh = np.where(norm > 0, Li / np.where(norm > 0, norm, 1), np.nan)
+    ax.plot(Lh[:, 0], Lh[:, 1], Lh[:, 2], color="black", linewidth=2.0, label="L direction")
+    ax.scatter(*Lh[0], color="black", s=40, marker="*")
+    _equal_3d(ax, 1.05)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    ax.legend(loc="upper left", fontsize="small")
+    frame = eph.dataset.attrs.get("frame", "inertial")
+    ax.set_title(_title(eph, f"Body axes on the unit sphere ({frame})"))
+    return fig
+
+
+def euler_angles(eph, reference_axis: int | None = None):
+    """Precession ``phi``, nutation ``theta`` and rotation ``psi`` (3-1-3 in the
+    angular-momentum frame, degrees) and their rates (deg per time unit) against time."""
+    from .diagnostics import momentum_frame_angles, reference_axis_for
+
+    series = _series(eph)
+    I, L, E2 = _invariants(series)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dyn = L ** 2 / E2
+    ref = reference_axis or reference_axis_for(I, dyn)
+    ang = momentum_frame_angles(series, ref)
+    t, unit = _time_axis(series.time)
+    fig = _pyplot_free_figure(figsize=(11, 7), layout="constrained")
+    axes = fig.subplots(3, 2, sharex=True)
+    names = (("precession", r"precession $\phi$"), ("nutation", r"nutation $\theta$"),
+             ("rotation", r"rotation $\psi$"))
+    for row, (key, label) in enumerate(names):
+        a = np.degrees(ang[key])
+        axes[row, 0].plot(t, a, color=_AXIS_COLOURS[row], linewidth=0.9)
+        axes[row, 0].set_ylabel(f"{label} (deg)")
+        rate = np.gradient(a, t) if t.size > 2 else np.zeros_like(a)
+        axes[row, 1].plot(t, rate, color=_AXIS_COLOURS[row], linewidth=0.9)
+        axes[row, 1].set_ylabel(f"d{label.split()[1]}/dt (deg/{unit})")
+        for ax in axes[row]:
+            ax.grid(True, alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel(f"time ({unit})")
+    fig.suptitle(_title(eph, f"Euler angles (3-1-3 about L, reference axis "
+                             f"{'A' if ref == 1 else 'C'})"))
+    return fig
+
+
+def regime_timeline(eph, classification=None):
+    """The regime over time (``classify(eph).segments``; pass ``classification`` to reuse
+    one) above the excitation ``L^2 / (2 E B)`` (1 on the separatrix, > 1 SAM, < 1 LAM)."""
+    if classification is None:
+        from .classify import classify
+
+        classification = classify(eph, require_periods=False)
+    series = _series(eph)
+    I, L, E2 = _invariants(series)
+    t, unit = _time_axis(series.time)
+    scale = (series.time[-1] / t[-1]) if t.size and t[-1] else 1.0
+    fig = _pyplot_free_figure(figsize=(10, 5), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(1, 2.5))
+    seen = set()
+    for start, stop, regime in classification.segments:
+        colour = _REGIME_COLOURS.get(regime, "tab:brown")
+        top.axvspan(start / scale, stop / scale, color=colour, alpha=0.8,
+                    label=None if regime in seen else regime)
+        seen.add(regime)
+    top.set_yticks([])
+    top.set_ylabel("regime")
+    top.legend(loc="upper left", ncol=min(4, len(seen)) or 1, fontsize="small")
+    top.set_title(f"classified: {classification.regime} "
+                  f"(confidence {classification.confidence:.2f})")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        excitation = L ** 2 / (E2 * I[1])
+    bottom.plot(t, excitation, color="tab:blue", linewidth=0.9)
+    bottom.axhline(1.0, color="tab:purple", linestyle="--", linewidth=1.0,
+                   label="separatrix")
+    bottom.set_ylabel(r"$L^2 / (2 E B)$")
+    bottom.set_xlabel(f"time ({unit})")
+    bottom.grid(True, alpha=0.3)
+    bottom.legend(loc="best", fontsize="small")
+    fig.suptitle(_title(eph, "Regime over time"))
+    return fig
+
+
+def _title(eph, what: str) -> str:
+    name = eph.dataset.attrs.get("title") or ""
+    return f"{what} - {name}" if name else what
+
+
+#: Figure name -> function, in the order :func:`figures` builds them.
+FIGURES = {"polhode": polhode, "herpolhode": herpolhode, "body_axes": body_axes,
+           "euler_angles": euler_angles, "regime": regime_timeline}
+
+
+def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
+    """Every figure of :data:`FIGURES` for ``eph``: ``{name: Figure}``.  The regime
+    timeline is included when ``regime`` is true, or by default when a
+    ``classification`` is given (perturbed runs)."""
+    include_regime = classification is not None if regime is None else regime
+    out = {}
+    for name, func in FIGURES.items():
+        if name == "regime":
+            if include_regime:
+                out[name] = func(eph, classification)
+        else:
+            out[name] = func(eph)
+    return out
+
+
+def save_figures(eph, stem: str | Path, classification=None, *, regime: bool | None = None,
+                 dpi: int = 100) -> list[Path]:
+    """Write :func:`figures` as ``<stem>_<name>.png``; returns the paths."""
+    stem = Path(stem)
+    paths = []
+    for name, fig in figures(eph, classification, regime=regime).items():
+        path = stem.with_name(f"{stem.name}_{name}.png")
+        fig.savefig(path, dpi=dpi)
+        paths.append(path)
+    return paths

@@ -1,0 +1,66 @@
+"""docs/scenario.schema.json (JSON Schema draft 2020-12) describes the scenario files: every
+shipped scenario validates, typical mistakes do not, and its keys match the loader's."""
+
+import json
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from attitude.regimes import PERIOD_KEYS, REGIMES
+from attitude.scenario import CONSERVATION_KEYS, SCHEMA
+from tests.test_scenario import GOOD
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA_PATH = ROOT / "docs" / "scenario.schema.json"
+SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+
+
+def _schema():
+    return json.loads(SCHEMA_PATH.read_text())
+
+
+def test_schema_keys_match_the_loader():
+    schema = _schema()
+    props = schema["properties"]
+    assert set(props) == set(SCHEMA)
+    for table in ("scenario", "body", "state", "propagation", "output"):
+        assert set(props[table]["properties"]) == set(SCHEMA[table]), table
+    expect = props["expect"]["properties"]
+    assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS}
+    assert expect["regime"]["enum"] == list(REGIMES)
+
+
+@pytest.fixture(scope="module")
+def validator():
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = _schema()
+    jsonschema.Draft202012Validator.check_schema(schema)
+    return jsonschema.Draft202012Validator(schema)
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=[p.name for p in SCENARIOS])
+def test_every_shipped_scenario_validates(validator, path):
+    doc = tomllib.loads(path.read_text())
+    errors = [f"{'/'.join(map(str, e.absolute_path))}: {e.message}"
+              for e in validator.iter_errors(doc)]
+    assert not errors, errors
+
+
+def test_the_test_scenario_validates(validator):
+    validator.validate(tomllib.loads(GOOD + '\n[expect]\nregime = "SAM"\n'))
+
+
+@pytest.mark.parametrize("old, new", [
+    ("[state]", "[state]\nspin = 3"),                                  # unknown key
+    ('step = "10 s"', ""),                                             # missing key
+    ("principal_moments = [1.0, 2.0, 3.0]",                            # two body kinds
+     "principal_moments = [1.0, 2.0, 3.0]\ninertia = [[1, 0, 0], [0, 2, 0], [0, 0, 3]]"),
+    ("[output]", '[expect]\nregime = "tumbling"\n[output]'),           # unknown regime
+    ("[output]", "[expect]\nprecession = { value = 1.0 }\n[output]"),  # no tolerance
+    ("[output]", '[[torques]]\ntype = "drag"\n[output]'),              # unknown torque
+    ("[0, 0, 0, 1]", "[0, 0, 1]"),                                     # quaternion length
+])
+def test_mistakes_are_rejected(validator, old, new):
+    assert old in GOOD
+    assert not validator.is_valid(tomllib.loads(GOOD.replace(old, new)))
