@@ -16,7 +16,7 @@ import tomllib
 from pathlib import Path
 
 from . import __version__
-from .errors import AttitudeError, PropagationError
+from .errors import AttitudeError, EphemerisFormatError, PropagationError
 
 __all__ = ["main"]
 
@@ -295,24 +295,38 @@ def _cmd_check(args) -> int:
 
 _CONVERT_HELP = """\
 Convert an ephemeris between netCDF (.nc) and CCSDS Attitude Ephemeris Messages
-(.aem: KVN text, .xml: XML), by file suffix.  AEM files are written in version 2.0 with
+(.aem: KVN text, .xml: XML), by file suffix, or write a SPICE C-kernel (.bc, type 3 with
+angular velocity, plus the SCLK, LSK, frame kernel and a meta-kernel beside it; needs
+pip install 'attitude[spice]').  AEM files are written in version 2.0 with
 ATTITUDE_TYPE = QUATERNION/ANGVEL unless --attitude-type says otherwise; AEM versions 1.0
 and 2.0 are read.  See docs/formats.md.
 
   attitude convert scenarios/apophis.nc apophis.aem --object-name APOPHIS --object-id 99942
   attitude convert apophis.aem apophis.xml
   attitude convert mission.aem mission.nc
+  attitude convert scenarios/apophis.nc apophis.bc --object-id -99942 --frame ECLIPJ2000
 """
 
 
 def _cmd_convert(args) -> int:
-    from .aem import convert
+    if Path(args.output).suffix.lower() == ".bc":
+        try:
+            from .spice import convert_to_ck
+        except ImportError as exc:
+            raise EphemerisFormatError(f"{args.output}: writing a SPICE CK needs spiceypy "
+                                       f"({exc}); pip install 'attitude[spice]'") from None
+        out = convert_to_ck(args.input, args.output, object_id=args.object_id,
+                            object_name=args.object_name, body_frame=args.body_frame,
+                            frame=args.frame, attitude_type=args.attitude_type)
+    else:
+        from .aem import convert
 
-    options = {k: v for k, v in (("object_name", args.object_name),
-                                 ("object_id", args.object_id),
-                                 ("ref_frame_b", args.body_frame),
-                                 ("attitude_type", args.attitude_type)) if v is not None}
-    out = convert(args.input, args.output, **options)
+        options = {k: v for k, v in (("object_name", args.object_name),
+                                     ("object_id", args.object_id),
+                                     ("ref_frame_a", args.frame),
+                                     ("ref_frame_b", args.body_frame),
+                                     ("attitude_type", args.attitude_type)) if v is not None}
+        out = convert(args.input, args.output, **options)
     print(f"Wrote      {out}")
     return EXIT_OK
 
@@ -385,8 +399,12 @@ def build_parser() -> argparse.ArgumentParser:
     conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem or .xml)")
     conv.add_argument("output", metavar="OUT", help="output file (.nc, .aem or .xml)")
     conv.add_argument("--object-name", help="AEM OBJECT_NAME (default: the body name)")
-    conv.add_argument("--object-id", help="AEM OBJECT_ID")
-    conv.add_argument("--body-frame", help="AEM REF_FRAME_B (default SC_BODY_1)")
+    conv.add_argument("--object-id", help="AEM OBJECT_ID; for .bc the NAIF ID (negative "
+                      "integer, default -999)")
+    conv.add_argument("--frame", help="inertial frame name written to the file (AEM "
+                      "REF_FRAME_A, SPICE reference frame; default: the ephemeris frame)")
+    conv.add_argument("--body-frame", help="AEM REF_FRAME_B / SPICE body frame (default "
+                      "SC_BODY_1)")
     conv.add_argument("--attitude-type", help="AEM ATTITUDE_TYPE (default QUATERNION/ANGVEL;"
                       " also QUATERNION, EULER_ANGLE, ...)")
     conv.set_defaults(func=_cmd_convert)

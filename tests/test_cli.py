@@ -115,3 +115,30 @@ def test_classify_bad_files_exit_2(tmp_path):
     proc = attitude("classify", short)      # far less than one polhode cycle
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_convert_to_spice_ck_reads_back_with_spiceypy(tmp_path, monkeypatch):
+    """attitude convert OUT.bc writes a CK that SPICE itself reads back (ckgp): the
+    C-matrix is the inverse of our body -> inertial rotation."""
+    spice = pytest.importorskip("spiceypy")
+    import numpy as np
+
+    import attitude as att
+
+    nc = tmp_path / "a.nc"
+    assert attitude("run", write(tmp_path, GOOD), "-o", nc, "--quiet").returncode == 0
+    proc = attitude("convert", nc, tmp_path / "a.bc", "--object-id", "-77")
+    assert proc.returncode == 0, proc.stderr
+    eph = att.Ephemeris.from_netcdf(nc)
+    monkeypatch.chdir(tmp_path)          # the meta-kernel's PATH_VALUES is its own folder
+    spice.furnsh("a.tm")
+    try:
+        from astropy.time import Time   # ephemeris time: TDB seconds past J2000 (SPICE)
+
+        et = (eph.times[5].tdb - Time("2000-01-01T12:00:00", scale="tdb")).sec
+        sclk = spice.sce2c(-77, et)
+        cmat, _ = spice.ckgp(-77000, sclk, 0.0, "J2000")   # raises if not found
+        expected = eph.rotation[5].as_matrix().T
+        np.testing.assert_allclose(cmat, expected, atol=1e-7)   # float64 ET resolution
+    finally:
+        spice.kclear()
