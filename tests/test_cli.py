@@ -133,7 +133,7 @@ def test_convert_to_spice_ck_reads_back_with_spiceypy(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)          # the meta-kernel's PATH_VALUES is its own folder
     spice.furnsh("a.tm")
     try:
-        from astropy.time import Time   # ephemeris time: TDB seconds past J2000 (SPICE)
+        from astropy.time import Time  # ephemeris time: TDB seconds past J2000 (SPICE)
 
         et = (eph.times[5].tdb - Time("2000-01-01T12:00:00", scale="tdb")).sec
         sclk = spice.sce2c(-77, et)
