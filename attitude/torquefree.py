@@ -32,6 +32,7 @@ import numpy as np
 from scipy import special as sp
 
 from . import _elliptic as el
+from ._quat import rotate
 from .errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
 from .regimes import PERIOD_KEYS, REGIMES
 
@@ -91,13 +92,6 @@ def _qmul(a, b):
 
 def _qconj(a):
     return (-a[0], -a[1], -a[2], a[3])
-
-
-def _rotate(q, v):
-    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4)."""
-    u, w = q[..., :3], q[..., 3:]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
 
 
 def _lin_turns(tsp, t, c, add=None):
@@ -545,7 +539,7 @@ def _precession_setup(I, w, q0):
     w_par = es * ws[:, None]
     w_perp = w - w_par
     e_x_wp = np.cross(es, w_perp)
-    Lin = _rotate(q0, Lb)
+    Lin = rotate(q0, Lb)
     Lf = L.astype(np.float64)
     with np.errstate(invalid="ignore", divide="ignore"):
         Lhat = np.where(Lf[:, None] > 0, Lin / np.where(Lf > 0, Lf, 1.0)[:, None], 0.0)
@@ -888,7 +882,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
     Lin = None
     if quat0 is not None:
         q = np.asarray(quat0, dtype=float)
-        Lin = _rotate(q / np.linalg.norm(q), Lp)
+        Lin = rotate(q / np.linalg.norm(q), Lp)
     base = dict(angular_momentum=L, kinetic_energy=E, omega_principal=wv,
                 angular_momentum_principal=Lp, angular_momentum_inertial=Lin)
     if L == 0.0:
