@@ -51,10 +51,11 @@ _TIME_ATTRS = {"units": "s", "long_name": "time elapsed since the reference epoc
                "comment": "seconds since the epoch given by the reference_epoch attribute "
                           "(and the epoch global attribute), in the time_scale time scale"}
 
-#: String labels.  In the netCDF file they are written as CF label variables (char arrays
-#: named ``<dim>_label``, CF 6.1), not as string coordinate variables: CF 1.3 requires a
-#: coordinate variable to be numeric and monotonic.  :meth:`Ephemeris.from_netcdf` maps
-#: them back to the in-memory coordinates of API.md.
+#: String labels (``x y z w``, ``x y z``, body names).  In the netCDF file the labels of a
+#: dimension are a string-valued coordinate variable stored as a char array (CF 6.1;
+#: netCDF4 ``_Encoding = "utf-8"``), so that any netCDF reader (xarray included) finds the
+#: coordinate values that API.md promises.  Older files wrote them as ``<dim>_label``
+#: variables: :meth:`Ephemeris.from_netcdf` still reads those.
 _LABEL_ATTRS = {
     "quaternion_component": {"long_name": "quaternion component (x, y, z vector part; "
                                           "w scalar part)"},
@@ -293,7 +294,7 @@ class Ephemeris:
         dimension; float variables are chunked (:data:`_CHUNK_TIME` samples along time)
         and zlib-compressed.  Returns the path."""
         path = Path(path)
-        ds = _to_file_dataset(self._dataset)
+        ds = self._dataset
         encoding = _file_encoding(ds)
         return write_atomically(path, lambda tmp: ds.to_netcdf(
             tmp, engine="netcdf4", format="NETCDF4", encoding=encoding,
@@ -315,19 +316,9 @@ class Ephemeris:
         return cls(ds)
 
 
-def _to_file_dataset(ds: xr.Dataset) -> xr.Dataset:
-    """The in-memory dataset as written to netCDF: string coordinates of a dimension become
-    CF label variables ``<dim>_label`` (char arrays, CF 6.1)."""
-    for dim in ("quaternion_component", "axis"):
-        if dim in ds.coords and ds[dim].dtype.kind in "UOS":
-            labels = ds[dim]
-            ds = ds.drop_vars(dim).assign_coords(
-                {dim + _LABEL_SUFFIX: (dim, labels.values.astype(str), labels.attrs)})
-    return ds
-
-
 def _from_file_dataset(ds: xr.Dataset) -> xr.Dataset:
-    """Inverse of :func:`_to_file_dataset` (also accepts files with string coordinates)."""
+    """Decode char-array labels to strings; map ``<dim>_label`` variables of older files
+    back to the coordinates of API.md."""
     for dim in ("quaternion_component", "axis"):
         label = dim + _LABEL_SUFFIX
         if label in ds.variables and dim not in ds.variables:

@@ -38,7 +38,6 @@ from .ephemeris import (
     _CHUNK_TIME,
     Ephemeris,
     _file_encoding,
-    _to_file_dataset,
 )
 from .errors import EphemerisFormatError
 
@@ -109,7 +108,7 @@ class EphemerisWriter:
             np.empty(0), np.empty((0, 4)), np.empty((0, 3)), body=self.body,
             epoch=self.epoch, frame=self.frame, **self._template_args)
         self._epoch_attr = template.dataset.attrs["epoch"]
-        ds = _to_file_dataset(template.dataset)
+        ds = template.dataset
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp",
                                          dir=self.path.parent)
