@@ -48,7 +48,8 @@ Rotation-state analysis of spacecraft and small bodies.
   attitude check scenarios/                run every scenario with an [expect] table
                                            and compare (what CI runs)
   attitude classify scenarios/apophis.nc   regime, periods, margin, confidence
-  attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML
+  attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML,
+                                           .bc for a SPICE C-kernel
 
 Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed.
 """
@@ -393,7 +394,7 @@ def build_parser() -> argparse.ArgumentParser:
     cls.add_argument("--json", action="store_true", help="print JSON instead of a table")
     cls.set_defaults(func=_cmd_classify)
 
-    conv = sub.add_parser("convert", help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml",
+    conv = sub.add_parser("convert", help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml, or to .bc (SPICE CK)",
                           description=_CONVERT_HELP,
                           formatter_class=argparse.RawDescriptionHelpFormatter)
     conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem or .xml)")
