@@ -394,7 +394,8 @@ def build_parser() -> argparse.ArgumentParser:
     cls.add_argument("--json", action="store_true", help="print JSON instead of a table")
     cls.set_defaults(func=_cmd_classify)
 
-    conv = sub.add_parser("convert", help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml, or to .bc (SPICE CK)",
+    conv = sub.add_parser("convert",
+                          help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml, or to .bc (SPICE)",
                           description=_CONVERT_HELP,
                           formatter_class=argparse.RawDescriptionHelpFormatter)
     conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem or .xml)")
