@@ -31,6 +31,7 @@ from .errors import (
     ScenarioError,
     ShapeModelError,
 )
+from .events import Event, event_table, nutation_crossing
 from .orbit import KeplerOrbit
 from .propagate import propagate
 from .state import INERTIAL_FRAMES, AttitudeState
@@ -43,6 +44,9 @@ __all__ = [
     "MassProperties",
     "AttitudeState",
     "Ephemeris",
+    "Event",
+    "nutation_crossing",
+    "event_table",
     "KeplerOrbit",
     "torques",
     "propagate",

@@ -108,3 +108,53 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
         out[order] = sol.y.T
     q = out[:, :4] / np.linalg.norm(out[:, :4], axis=1, keepdims=True)
     return q, out[:, 4:]
+
+
+def integrate_reference_events(body: RigidBody, quat0, omega0, t, events, *,
+                               torques: Sequence[Torque] = (), rtol: float = DEFAULT_RTOL,
+                               atol_scale: float = DEFAULT_ATOL_SCALE,
+                               method: str = "DOP853"):
+    """:func:`integrate_reference` forward in time with events (``solve_ivp``'s own
+    event location on the dense output; :mod:`attitude.events`).
+
+    Returns ``(quaternion (T, 4), omega (T, 3), records)``, ``records`` a time-ordered
+    list of ``(t_event, event_index, quaternion (4,), omega (3,))``; outputs after a
+    terminal event are NaN.
+    """
+    from .events import evaluate
+
+    t = np.asarray(t, dtype=float)
+    if np.any(t < 0):
+        raise PropagationError("events need forward propagation: every time >= 0")
+    y0 = np.concatenate([np.asarray(quat0, float), np.asarray(omega0, float)])
+    scale = float(np.linalg.norm(omega0)) or 1.0
+    atol = atol_scale * np.array([1.0] * 4 + [scale] * 3)
+    rhs = _rhs(body, tuple(torques))
+
+    def wrap(ev):
+        def g(tt, y):
+            return evaluate(ev, tt, y[:4] / np.linalg.norm(y[:4]), y[4:], body)
+
+        g.terminal = bool(getattr(ev, "terminal", False))
+        g.direction = float(getattr(ev, "direction", 0))
+        return g
+
+    out = np.full((t.size, 7), np.nan)
+    order = np.argsort(t, kind="stable")
+    end = float(t[order[-1]]) if t.size else 0.0
+    if end == 0.0:
+        out[:] = y0
+        return out[:, :4], out[:, 4:], []
+    sol = solve_ivp(rhs, (0.0, end), y0, method=method, t_eval=t[order], rtol=rtol,
+                    atol=atol, events=[wrap(ev) for ev in events])
+    if sol.status < 0:
+        reached = f"{sol.t[-1]:.6g} s" if sol.t.size else "the first step"
+        raise PropagationError(f"{method} integration failed at {reached}: {sol.message}")
+    out[order[:sol.t.size]] = sol.y.T
+    records = []
+    for i, (te, ye) in enumerate(zip(sol.t_events, sol.y_events)):
+        for tk, yk in zip(te, ye):
+            records.append((float(tk), i, yk[:4] / np.linalg.norm(yk[:4]), yk[4:].copy()))
+    records.sort(key=lambda r: r[0])
+    q = out[:, :4] / np.linalg.norm(out[:, :4], axis=1, keepdims=True)
+    return q, out[:, 4:], records

@@ -18,7 +18,8 @@ from . import _quat
 from .body import RigidBody
 from .ephemeris import Ephemeris
 from .errors import InvalidStateError
-from .integrate import integrate_reference
+from .events import as_events, locate, name_of
+from .integrate import integrate_reference, integrate_reference_events
 from .state import AttitudeState
 
 __all__ = ["propagate", "METHODS", "elapsed_seconds"]
@@ -89,7 +90,7 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
               Sequence[AttitudeState], times, *, torques: Sequence | None = None,
               method: str | None = None, rtol: float | None = None,
               step: float | u.Quantity | None = None, order: int | None = None,
-              progress: bool = False) -> Ephemeris:
+              progress: bool = False, events=None) -> Ephemeris:
     """Propagate the rotation of one body, or of a batch of bodies, to ``times``.
 
     Parameters
@@ -117,6 +118,16 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
         Order of the ``"splitting"`` method (default 4).
     progress : bool
         Progress bar for the ``"splitting"`` method (off by default).
+
+    events : callable or sequence of callables, optional
+        Events ``g(t, quaternion, omega_body, body) -> float`` with optional attributes
+        ``terminal`` and ``direction`` like scipy's (:class:`attitude.events.Event`,
+        :func:`attitude.events.nutation_crossing`).  Crossings are located to ~1e-12
+        relative in time on the method's own solution and recorded in the ephemeris
+        (``event_time``, ``event_name``, ``event_quaternion``,
+        ``event_angular_velocity``; :func:`attitude.events.event_table`); a terminal
+        event ends the ephemeris, its last sample being the event.  Times must be
+        >= 0; terminal events are not available for a batch.
 
     ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol``
     only by ``"integrator"``; the exact solution ignores them.
@@ -156,10 +167,22 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
                                 "method='splitting' or method='integrator' with torques")
     if step is not None:
         step = _step_seconds(step)
+    events = as_events(events)
 
     q0 = np.stack([s.attitude.as_quat() for s in states])             # body -> inertial
     w0 = np.stack([s.omega_body for s in states])
-    if method == "exact":
+    records = None
+    if events:
+        if np.any(t < 0):
+            raise InvalidStateError("events: propagation with events is forward only; "
+                                    "give times >= 0")
+        if batch and any(getattr(ev, "terminal", False) for ev in events):
+            raise InvalidStateError("events: terminal events are not available for a "
+                                    "batch (each body would stop at its own time); use "
+                                    "terminal=False, or propagate the bodies one by one")
+        t, q, w, records = _with_events(method, bodies, q0, w0, t, events, torques, step,
+                                        order, rtol, progress)
+    elif method == "exact":
         q, w = _exact(bodies, q0, w0, t)
     elif method == "splitting":
         from .splitting import integrate_splitting
@@ -175,10 +198,151 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
     if not batch:
         q, w, bodies = q[0], w[0], bodies[0]
     name = bodies.name if isinstance(bodies, RigidBody) else "batch"
-    return Ephemeris.from_arrays(
+    eph = Ephemeris.from_arrays(
         t, q, w, body=bodies, epoch=states[0].epoch, frame=states[0].frame,
         title=f"attitude ephemeris{': ' + name if name else ''}",
         source=f"attitude.propagate, method={method}{_DESCRIPTION[method]}")
+    if records is not None:
+        eph = _record_events(eph, records, events, batch)
+    return eph
+
+
+def _record_events(eph: Ephemeris, records: list, events: list, batch: bool) -> Ephemeris:
+    """Event variables along an ``event`` dimension (absent when nothing happened)."""
+    rows = [(rec, b) for b, recs in enumerate(records) for rec in recs]
+    ds = eph.dataset.copy()
+    ds.attrs["event_count"] = len(rows)
+    ds.attrs["event_names"] = ", ".join(name_of(ev) for ev in events)
+    if rows:
+        ds["event_time"] = ("event", np.array([r[0] for r, _ in rows]), {
+            "long_name": "time of the event", "units": "s",
+            "comment": "seconds since the epoch global attribute"})
+        ds["event_name"] = ("event", np.array([name_of(events[r[1]]) for r, _ in rows]),
+                            {"long_name": "name of the event"})
+        ds["event_quaternion"] = (("event", "quaternion_component"), _quat.canonical(
+            np.stack([r[2] for r, _ in rows])), {
+            "long_name": "attitude quaternion at the event", "units": "1"})
+        ds["event_angular_velocity"] = (("event", "axis"), np.stack([r[3] for r, _ in rows]),
+                                        {"long_name": "body-frame angular velocity at "
+                                                      "the event", "units": "rad s-1"})
+        if batch:
+            ds["event_body"] = ("event", np.array([b for _, b in rows]), {
+                "long_name": "body index of the event", "units": "1"})
+    return Ephemeris(ds)
+
+
+def _grid(t: np.ndarray, h: float) -> np.ndarray:
+    """0, the output times and equal steps no longer than ``h`` between them."""
+    from .splitting import _count
+
+    knots = np.unique(np.concatenate([[0.0], t]))
+    parts = [knots[:1]]
+    for a, b in zip(knots[:-1], knots[1:]):
+        n = _count(b - a, h)
+        parts.append(np.linspace(a, b, n + 1)[1:])
+    return np.concatenate(parts)
+
+
+def _scan_step(bodies: list[RigidBody], w0: np.ndarray) -> float:
+    """Scan step of the closed form: 1/64 of the fastest body-frame turning period of
+    omega (``|omega| C / A``)."""
+    rates = [float(np.linalg.norm(w)) * b.principal_moments[2] / b.principal_moments[0]
+             for b, w in zip(bodies, w0)]
+    rate = max(rates)
+    return 2.0 * np.pi / (64.0 * rate) if rate > 0 else np.inf
+
+
+def _with_events(method, bodies, q0, w0, t, events, torques, step, order, rtol, progress):
+    """Propagate with events: ``(t, q (N, T, 4), w (N, T, 3), records per body)``."""
+    if method == "integrator":
+        kwargs = {} if rtol is None else {"rtol": rtol}
+        results = [integrate_reference_events(b, q0[i], w0[i], t, events, torques=torques,
+                                              **kwargs) for i, b in enumerate(bodies)]
+        q = np.stack([r[0] for r in results])
+        w = np.stack([r[1] for r in results])
+        records = [r[2] for r in results]
+    else:
+        if method == "exact":
+            grid = _grid(t, _scan_step(bodies, w0))
+            qg, wg = _exact(bodies, q0, w0, grid)
+
+            def state_at(i, k, x):
+                if x == grid[k]:
+                    return qg[i, k], wg[i, k]
+                qx, wx = _exact([bodies[i]], q0[i:i + 1], w0[i:i + 1], np.array([x]))
+                return qx[0, 0], wx[0, 0]
+        else:
+            from .splitting import choose_step
+
+            order = 4 if order is None else order
+            h = step if step is not None else choose_step(bodies, q0, w0, torques,
+                                                          order=order)
+            if not np.isfinite(h):
+                h = _scan_step(bodies, w0)
+            grid = _grid(t, h)
+            hs = h * (1.0 + 1e-9)
+            return _splitting_events(bodies, q0, w0, t, grid, events, torques, hs, order,
+                                     progress)
+        idx = np.searchsorted(grid, t)
+        q, w = qg[:, idx], wg[:, idx]
+        records = [locate(events, grid, qg[i], wg[i], b,
+                          lambda k, x, i=i: state_at(i, k, x))
+                   for i, b in enumerate(bodies)]
+    return _truncate(t, q, w, records, events)
+
+
+#: Steps per chunk of the splitting method with events (a terminal event stops after the
+#: chunk that holds it).
+_EVENT_CHUNK = 4096
+
+
+def _splitting_events(bodies, q0, w0, t, grid, events, torques, hs, order, progress):
+    """Splitting with events: the step grid in chunks, crossings located on each chunk
+    by ``brentq`` over a partial step from the step's start."""
+    from .splitting import integrate_splitting
+
+    n, m = len(bodies), grid.size
+    qg, wg = np.full((n, m, 4), np.nan), np.full((n, m, 3), np.nan)
+    qg[:, 0], wg[:, 0] = q0, w0
+    records = [[] for _ in bodies]
+    start = 0
+    while start < m - 1:
+        end = min(start + _EVENT_CHUNK, m - 1)
+        seg = grid[start:end + 1]
+        qs, ws = integrate_splitting(bodies, qg[:, start], wg[:, start], seg[1:],
+                                     torques=torques, step=hs, order=order,
+                                     progress=progress, t0=seg[0])
+        qg[:, start + 1:end + 1], wg[:, start + 1:end + 1] = qs, ws
+
+        def state_at(i, k, x, seg=seg, start=start):
+            if x == seg[k]:
+                return qg[i, start + k], wg[i, start + k]
+            qx, wx = integrate_splitting(bodies[i], qg[i, start + k], wg[i, start + k], [x],
+                                         torques=torques, step=hs, order=order, t0=seg[k])
+            return qx[0], wx[0]
+
+        for i, b in enumerate(bodies):
+            records[i].extend(locate(events, seg, qg[i, start:end + 1],
+                                     wg[i, start:end + 1], b,
+                                     lambda k, x, i=i: state_at(i, k, x)))
+        start = end
+        if n == 1 and records[0] and getattr(events[records[0][-1][1]], "terminal", False):
+            break
+    idx = np.searchsorted(grid, t)
+    return _truncate(t, qg[:, idx], wg[:, idx], records, events)
+
+
+def _truncate(t, q, w, records, events):
+    """Cut a single body's outputs at its terminal event (the event is the last
+    sample)."""
+    if len(records) == 1 and records[0] and getattr(events[records[0][-1][1]], "terminal",
+                                                    False):
+        te, _, qe, we = records[0][-1]
+        keep = t < te
+        t = np.append(t[keep], te)
+        q = np.concatenate([q[:, keep], qe[None, None]], axis=1)
+        w = np.concatenate([w[:, keep], we[None, None]], axis=1)
+    return t, q, w, records
 
 
 _DESCRIPTION = {

@@ -1002,8 +1002,8 @@ def _count(dt: float, h_max: float) -> int:
 
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
                         order: int | None = None, scheme: str | None = None,
-                        progress: bool = False, steps_per_period: float | None = None
-                        ) -> tuple[np.ndarray, np.ndarray]:
+                        progress: bool = False, steps_per_period: float | None = None,
+                        t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Propagate rigid bodies under torques with a splitting method.
 
     The exact free rigid-body flow alternates with torque kicks (see the module
@@ -1041,6 +1041,9 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         Show a progress bar (``tqdm`` if installed, else a line on stderr).
     steps_per_period : float, optional
         ``N`` of the default step rule (:func:`choose_step`).
+    t0 : float
+        Time of ``quat0`` / ``omega0``, s since the epoch (default 0); ``t`` stays in
+        seconds since the epoch (used to restart from an intermediate state).
 
     Returns
     -------
@@ -1088,6 +1091,8 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     t = np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1 or not np.all(np.isfinite(t)):
         raise InvalidStateError("t: expected a 1-D array of finite times (s)")
+    t0 = float(t0)
+    t = t - t0
     q_p0, w_p0 = system.to_principal(q0, w0)
 
     if step is None:
@@ -1138,7 +1143,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                             if nf & 1023 == 0:
                                 bar.update(1024)
                         else:
-                            w, cached = _kick(ops, t_now + acc * h, q, w, cc * h, cached,
+                            w, cached = _kick(ops, t0 + t_now + acc * h, q, w, cc * h, cached,
                                               has_kick, has_drag, rk_order)
                     bar.update(nf & 1023)
                     t_now = t[j]
