@@ -104,9 +104,11 @@ def _summary(result) -> str:
             lines.append(f"Classified {result.note}")
         else:
             extra = ""
-            if c.lyapunov is not None and c.lyapunov.lyapunov_time is not None and \
-                    math.isfinite(c.lyapunov.lyapunov_time):
-                extra = f"; Lyapunov time {_format_seconds(c.lyapunov.lyapunov_time)}"
+            ly = c.lyapunov
+            if ly is not None and ly.chaotic:
+                extra = f"; Lyapunov time {_format_seconds(ly.lyapunov_time)}"
+            elif ly is not None:
+                extra = "; regular (Lyapunov exponent not above the torque-free control)"
             lines.append(f"Classified regime {c.regime} (confidence {c.confidence:.2f})"
                          + (f"; periods: {periods}" if periods else "") + extra)
             if len(c.segments) > 1:
@@ -115,9 +117,11 @@ def _summary(result) -> str:
     else:
         lines.append(f"Motion     regime {d.regime}" + (f"; periods: {periods}" if periods else ""))
     c = result.conservation
-    lines.append(f"Conserved  |L| = {d.angular_momentum:.10g} kg m^2/s (max rel. drift "
-                 f"{c['angular_momentum_rel_drift']:.2g}), E = {d.kinetic_energy:.10g} J "
-                 f"(max rel. drift {c['energy_rel_drift']:.2g})")
+    label = "Changed   " if sc.torques else "Conserved "
+    lines.append(f"{label} L (inertial vector): |L0| = {d.angular_momentum:.10g} kg m^2/s, "
+                 f"max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}; "
+                 f"E0 = {d.kinetic_energy:.10g} J, max |E - E0|/E0 = "
+                 f"{c['energy_rel_drift']:.2g}")
     for e in result.expectations:
         lines.append("Expect     " + _expectation_line(e))
     for p in result.outputs:

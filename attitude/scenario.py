@@ -25,7 +25,8 @@ from .errors import AttitudeError, ScenarioError
 from .regimes import PERIOD_KEYS, REGIMES
 from .state import AttitudeState, check_frame
 
-__all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations", "SCHEMA"]
+__all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
+           "spin_axis_state", "known_variables", "SCHEMA", "EXPECT_KEYS"]
 
 #: Allowed keys of each table (``None``: free-form sub-table checked by its parser).
 SCHEMA: dict[str, dict[str, Any]] = {
@@ -33,7 +34,8 @@ SCHEMA: dict[str, dict[str, Any]] = {
     "body": {"principal_moments": None, "inertia": None, "shape": str, "density": None,
              "length_unit": str, "parts": list, "mass": None, "name": str},
     "state": {"epoch": str, "time_scale": str, "frame": str, "attitude": dict,
-              "omega_body": None},
+              "omega_body": None, "spin_axis": dict, "spin_rate": None, "spin_period": None,
+              "spin_about": str},
     "propagation": {"duration": None, "step": None, "method": str, "rtol": float},
     "torques": list,
     "output": {"netcdf": str},
@@ -173,7 +175,7 @@ def load_scenario(path: str | Path) -> Scenario:
     description = r.string(meta, "description", "scenario", default="")
     body = _body(r, r.table(doc, "body"), path.parent)
     try:
-        state = _state(r, r.table(doc, "state"))
+        state = _state(r, r.table(doc, "state"), body)
     except ScenarioError:
         raise
     except AttitudeError as exc:  # physical validation by AttitudeState
@@ -335,10 +337,77 @@ def _rotation(r: _Reader, table, key: str) -> Rotation:
     return Rotation.from_quat(q, scalar_first=(form == "quaternion_scalar_first"))
 
 
-def _state(r: _Reader, table: dict) -> AttitudeState:
-    for key in ("epoch", "omega_body"):
+_SPIN_KEYS = ("spin_axis", "spin_rate", "spin_period", "spin_about")
+
+
+def spin_axis_state(body: RigidBody, ra: float, dec: float, rate: float,
+                    about: str = "C") -> tuple[Rotation, np.ndarray]:
+    """Attitude (body -> inertial) and body-frame rates of a principal-axis spin at
+    ``rate`` (rad/s) about the principal axis ``about`` (``"A"``, ``"B"``, ``"C"``) pointing
+    to right ascension ``ra``, declination ``dec`` (rad) of the inertial frame.
+
+    The spin axis goes to ``n = (cos dec cos ra, cos dec sin ra, sin dec)``; the rotation
+    phase is fixed by putting the next principal axis (B for A, C for B, A for C) along
+    the node ``z x n`` (along ``y`` when ``n`` is a pole).
+    """
+    k = "ABC".index(about)
+    n = np.array([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)])
+    node = np.cross([0.0, 0.0, 1.0], n)
+    if np.linalg.norm(node) < 1e-12:
+        node = np.array([0.0, 1.0, 0.0])
+    node /= np.linalg.norm(node)
+    third = np.cross(n, node)
+    # principal -> inertial: column k is n, column k+1 the node, column k+2 completes
+    m = np.empty((3, 3))
+    m[:, k], m[:, (k + 1) % 3], m[:, (k + 2) % 3] = n, node, third
+    principal_to_inertial = Rotation.from_matrix(m)
+    attitude = principal_to_inertial * body.body_to_principal
+    axis_body = body.principal_axes[:, k]
+    return attitude, rate * axis_body
+
+
+def _spin_state(r: _Reader, table: dict, body: RigidBody) -> tuple[Rotation, np.ndarray]:
+    if "spin_axis" not in table:
+        other = next(k for k in _SPIN_KEYS if k in table)
+        raise r.fail("state.spin_axis", f"missing key (needed with state.{other})")
+    for key in ("attitude", "omega_body"):
+        if key in table:
+            raise r.fail(f"state.{key}", "not with state.spin_axis (the spin axis and rate "
+                                         "give both the attitude and omega_body)")
+    axis = table["spin_axis"]
+    r.check_keys(axis, ("ra", "dec"), "state.spin_axis")
+    for key in ("ra", "dec"):
+        if key not in axis:
+            raise r.fail(f"state.spin_axis.{key}", "missing key")
+    ra = r.quantity(axis["ra"], "rad", "state.spin_axis.ra")
+    dec = r.quantity(axis["dec"], "rad", "state.spin_axis.dec")
+    if not abs(dec) <= np.pi / 2 * (1 + 1e-12):
+        raise r.fail("state.spin_axis.dec", f"must be within +-90 deg, got "
+                                            f"{np.degrees(dec):.6g} deg")
+    if ("spin_rate" in table) == ("spin_period" in table):
+        raise r.fail("state.spin_rate", "give exactly one of spin_rate, spin_period")
+    if "spin_rate" in table:
+        rate = r.quantity(table["spin_rate"], "rad/s", "state.spin_rate")
+        if not rate >= 0:
+            raise r.fail("state.spin_rate", f"must be non-negative, got {rate} rad/s")
+    else:
+        period = r.quantity(table["spin_period"], "s", "state.spin_period")
+        if not period > 0:
+            raise r.fail("state.spin_period", f"must be positive, got {period} s")
+        rate = 2 * np.pi / period
+    about = r.string(table, "spin_about", "state", default="C")
+    if about not in ("A", "B", "C"):
+        raise r.fail("state.spin_about", f"expected \"A\", \"B\" or \"C\" (principal "
+                                         f"axes, A <= B <= C), got {about!r}")
+    return spin_axis_state(body, ra, dec, rate, about)
+
+
+def _state(r: _Reader, table: dict, body: RigidBody) -> AttitudeState:
+    spin = any(k in table for k in _SPIN_KEYS)
+    for key in ("epoch",) if spin else ("epoch", "omega_body"):
         if key not in table:
-            raise r.fail(f"state.{key}", "missing key")
+            raise r.fail(f"state.{key}", "missing key" + (
+                "" if key == "epoch" else " (or give spin_axis with spin_rate/spin_period)"))
     scale = r.string(table, "time_scale", "state", default="tdb").lower()
     if scale not in Time.SCALES:
         raise r.fail("state.time_scale", f"{scale!r} is not a time scale; use one of "
@@ -354,9 +423,12 @@ def _state(r: _Reader, table: dict) -> AttitudeState:
         frame = check_frame(frame)
     except AttitudeError as exc:
         raise r.fail("state.frame", str(exc)) from None
-    attitude = (_rotation(r, table["attitude"], "state.attitude") if "attitude" in table
-                else Rotation.identity())
-    omega = r.quantity(table["omega_body"], "rad/s", "state.omega_body", shape=(3,))
+    if spin:
+        attitude, omega = _spin_state(r, table, body)
+    else:
+        attitude = (_rotation(r, table["attitude"], "state.attitude") if "attitude" in table
+                    else Rotation.identity())
+        omega = r.quantity(table["omega_body"], "rad/s", "state.omega_body", shape=(3,))
     return AttitudeState(epoch=epoch, attitude=attitude, omega_body=omega, frame=frame)
 
 
@@ -379,6 +451,9 @@ class RunResult:
     expectations: list
     outputs: list
     note: str = ""
+    dataset: Any = None
+    """The dataset the ``[expect]`` variables were read from (the ephemeris dataset, with
+    the :func:`~attitude.diagnostics.add_diagnostics` variables when needed), or None."""
 
     @property
     def ok(self) -> bool:
@@ -438,13 +513,162 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
         except (DiagnosticsError, AttitudeError) as exc:
             note = f"not classified: {exc}"
     conservation = eph.conservation()
-    result = RunResult(scenario, eph, diagnosis, classification, conservation, [], [], note)
-    result.expectations.extend(check_expectations(scenario, result.regime, result.periods,
-                                                  conservation))
+    need = needs_dataset(scenario)
+    dataset = None
+    if need == "base":
+        dataset = eph.dataset
+    elif need is not None:
+        from .diagnostics import add_diagnostics
+
+        try:
+            dataset = add_diagnostics(eph, periods=need == "periods").dataset
+        except (DiagnosticsError, AttitudeError) as exc:
+            note = (note + "; " if note else "") + f"no diagnostics: {exc}"
+    result = RunResult(scenario, eph, diagnosis, classification, conservation, [], [], note,
+                       dataset)
+    result.expectations.extend(check_expectations(
+        scenario, result.regime, result.periods, conservation, diagnosis=diagnosis,
+        dataset=dataset))
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
     if target is not None and write_outputs:
         result.outputs.append(eph.to_netcdf(target))
     return result
+
+
+#: Reductions of a time series for ``[expect.variables]``.
+REDUCTIONS = ("start", "end", "max", "min", "mean")
+#: Variables of the base ephemeris dataset (API.md) and their units.
+BASE_VARIABLES = {"quaternion": "1", "angular_velocity": "rad s-1",
+                  "angular_momentum": "kg m2 s-1", "kinetic_energy": "J"}
+_VARIABLE_KEYS = ("variable", "at", "component", "value", "unit", "rel_tol", "abs_tol")
+_TOLERANCE_KEYS = ("rel_tol", "abs_tol")
+
+
+def known_variables() -> dict[str, tuple[str, bool]]:
+    """Variables ``[expect.variables]`` may name: ``{name: (units, is_time_series)}``.
+
+    The base dataset (``quaternion``, ``angular_velocity``, ``angular_momentum``,
+    ``kinetic_energy``), the time series of :func:`attitude.diagnostics.add_diagnostics`
+    (:data:`~attitude.diagnostics.DIAGNOSTIC_VARIABLES`) and its scalars (conservation
+    figures, ``attitude_noise``, measured periods ``period_<key>`` and their
+    ``period_<key>_uncertainty``).
+    """
+    from .diagnostics import _SCALAR_META, DIAGNOSTIC_VARIABLES
+
+    out = {k: (v, True) for k, v in BASE_VARIABLES.items()}
+    out.update({k: (v[0], True) for k, v in DIAGNOSTIC_VARIABLES.items()})
+    out.update({name: (units, False) for name, units, _ in _SCALAR_META.values()})
+    for key in PERIOD_KEYS:
+        out[f"period_{key}"] = ("s", False)
+        out[f"period_{key}_uncertainty"] = ("s", False)
+    return out
+
+
+def _tolerance(r: _Reader, spec: dict, where: str, value: float, scale: float = 1.0) -> float:
+    """Exactly one of ``rel_tol`` / ``abs_tol`` (in the expectation's unit) -> absolute."""
+    if ("rel_tol" in spec) == ("abs_tol" in spec):
+        raise r.fail(where, "give exactly one of rel_tol, abs_tol")
+    tol_key = "rel_tol" if "rel_tol" in spec else "abs_tol"
+    tol = r.quantity(spec[tol_key], "", f"{where}.{tol_key}")
+    if not tol >= 0:
+        raise r.fail(f"{where}.{tol_key}", "must be non-negative")
+    return tol * abs(value) if tol_key == "rel_tol" else tol * scale
+
+
+def _unit(r: _Reader, text, where: str, target: str) -> u.UnitBase:
+    if not isinstance(text, str):
+        raise r.fail(where, f"expected a unit string, got {text!r}")
+    try:
+        unit = u.Unit(text)
+    except ValueError:
+        raise r.fail(where, f"unknown unit {text!r}") from None
+    if not unit.is_equivalent(u.Unit(target)):
+        raise r.fail(where, f"unit '{text}' cannot be converted to '{target}'")
+    return unit
+
+
+def _parse_nutation_range(r: _Reader, spec, where: str) -> list[dict]:
+    """``{ min = .., max = .., unit = "deg", abs_tol = .. }`` -> two entries
+    ``nutation_range.min`` and ``nutation_range.max`` (in ``unit``, default rad)."""
+    if not isinstance(spec, dict):
+        raise r.fail(where, "expected { min = ..., max = ..., unit = \"deg\", abs_tol = ... }")
+    r.check_keys(spec, ("min", "max", "unit", "abs_tol"), where)
+    for key in ("min", "max", "abs_tol"):
+        if key not in spec:
+            raise r.fail(f"{where}.{key}", "missing key")
+    unit = spec.get("unit", "rad")
+    _unit(r, unit, f"{where}.unit", "rad")
+    out = {}
+    for key in ("min", "max", "abs_tol"):
+        value = spec[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise r.fail(f"{where}.{key}", f"expected a number (in {unit}), got {value!r}")
+        out[key] = float(value)
+    if not out["abs_tol"] >= 0:
+        raise r.fail(f"{where}.abs_tol", "must be non-negative")
+    if not out["min"] <= out["max"]:
+        raise r.fail(where, f"min ({out['min']}) is larger than max ({out['max']})")
+    return [{"key": f"nutation_range.{k}", "expected": out[k], "unit": unit,
+             "tolerance": out["abs_tol"]} for k in ("min", "max")]
+
+
+def _parse_variables(r: _Reader, table, where: str) -> list[dict]:
+    """``[expect.variables]``: ``name = { at = "end", component = 2, value = .., unit = "..",
+    rel_tol = .. }`` for any variable of :func:`known_variables`."""
+    if not isinstance(table, dict):
+        raise r.fail(where, "expected a table [expect.variables]")
+    known = known_variables()
+    out = []
+    for label, spec in table.items():
+        key = f"{where}.{label}"
+        if not isinstance(spec, dict):
+            raise r.fail(key, "expected { at = \"end\", value = ..., unit = \"...\", "
+                              "rel_tol = ... }")
+        r.check_keys(spec, _VARIABLE_KEYS, key)
+        name = spec.get("variable", label)
+        if not isinstance(name, str):
+            raise r.fail(f"{key}.variable", f"expected a string, got {name!r}")
+        if name not in known:
+            near = difflib.get_close_matches(name, list(known), n=1)
+            hint = f"; did you mean '{near[0]}'?" if near else \
+                f"; known: {', '.join(known)}"
+            raise r.fail(f"{key}.variable" if "variable" in spec else key,
+                         f"unknown variable {name!r}{hint}")
+        var_units, series = known[name]
+        at = spec.get("at")
+        if series and at not in REDUCTIONS:
+            raise r.fail(f"{key}.at", f"{name} is a time series: give at = one of "
+                                      f"{', '.join(REDUCTIONS)}" +
+                         ("" if at is None else f", got {at!r}"))
+        if not series and at is not None:
+            raise r.fail(f"{key}.at", f"{name} is a single number; remove 'at'")
+        component = spec.get("component")
+        vector = name in ("quaternion", "angular_velocity", "angular_momentum",
+                          "momentum_axis_angle")
+        if component is not None:
+            size = 4 if name == "quaternion" else 3
+            if not vector:
+                raise r.fail(f"{key}.component", f"{name} is not a vector; remove 'component'")
+            if component != "norm" and (isinstance(component, bool) or
+                                        not isinstance(component, int) or
+                                        not 0 <= component < size):
+                raise r.fail(f"{key}.component", f"expected an index 0..{size - 1} or "
+                                                 f"\"norm\", got {component!r}")
+        elif vector:
+            raise r.fail(f"{key}.component", f"{name} is a vector: give component = an index "
+                                             "or \"norm\"")
+        if "value" not in spec:
+            raise r.fail(f"{key}.value", "missing key")
+        value = spec["value"]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise r.fail(f"{key}.value", f"expected a number, got {value!r}")
+        unit_text = spec.get("unit", var_units)
+        _unit(r, unit_text, f"{key}.unit", var_units)
+        entry = {"key": f"variables.{label}", "expected": float(value), "unit": unit_text,
+                 "tolerance": _tolerance(r, spec, key, float(value)),
+                 "variable": name, "at": at, "component": component}
+        out.append(entry)
+    return out
 
 
 def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
@@ -452,7 +676,9 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
 
     ``regime = "SAM"``; a period key (``polhode``, ``precession``, ``rotation``, ``spin``)
     as ``{ value = 27.38, unit = "h", rel_tol = 0.01 }`` (or ``abs_tol`` in the same
-    unit); a conservation key as ``{ max = 1e-12 }``.
+    unit); a conservation key as ``{ max = 1e-12 }``; ``nutation_range = { min = ..,
+    max = .., unit = "deg", abs_tol = .. }``; a ``[expect.variables]`` table of dataset
+    variables reduced over the run (:func:`_parse_variables`).
     """
     parsed = []
     for key, spec in table.items():
@@ -469,44 +695,120 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
                 raise r.fail(where, "give exactly one of rel_tol, abs_tol")
             unit = spec.get("unit", "s")
             value = r.quantity({"value": spec.get("value"), "unit": unit}, "s", where)
-            tol_key = "rel_tol" if "rel_tol" in spec else "abs_tol"
-            tol = r.quantity(spec[tol_key], "", f"{where}.{tol_key}")
-            if not tol >= 0:
-                raise r.fail(f"{where}.{tol_key}", "must be non-negative")
             scale = u.Unit(unit).to(u.s)
             parsed.append({"key": key, "expected": value / scale, "unit": unit,
-                           "tolerance": tol * abs(value) / scale if tol_key == "rel_tol"
-                           else tol})
+                           "tolerance": _tolerance(r, spec, where, value / scale)})
         elif key in CONSERVATION_KEYS:
             if not isinstance(spec, dict) or set(spec) != {"max"}:
                 raise r.fail(where, "expected { max = ... }")
             parsed.append({"key": key, "expected": r.quantity(spec["max"], "",
                                                               f"{where}.max")})
+        elif key == "nutation_range":
+            parsed.extend(_parse_nutation_range(r, spec, where))
+        elif key == "variables":
+            parsed.extend(_parse_variables(r, spec, where))
         else:
-            allowed = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS
+            allowed = EXPECT_KEYS
             near = difflib.get_close_matches(key, allowed, n=1)
             hint = f"; did you mean '{near[0]}'?" if near else f"; allowed: {', '.join(allowed)}"
             raise r.fail(where, f"unknown expectation{hint}")
     return tuple(parsed)
 
 
+#: Keys of the ``[expect]`` table.
+EXPECT_KEYS = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS + ("nutation_range", "variables")
+
+
+def needs_dataset(scenario: Scenario) -> str | None:
+    """Whether checking the expectations needs :func:`add_diagnostics` of the run:
+    ``None`` (no), ``"base"`` (base variables only), ``"diagnostics"`` or ``"periods"``."""
+    need = None
+    base = set(BASE_VARIABLES)
+    for spec in scenario.expect:
+        if spec["key"].startswith("nutation_range.") and scenario.torques:
+            need = need or "diagnostics"
+        elif "variable" in spec:
+            if spec["variable"].startswith("period_"):
+                return "periods"
+            if spec["variable"] not in base:
+                need = "diagnostics"
+            elif need is None:
+                need = "base"
+    return need
+
+
+def _reduce(data: np.ndarray, at: str | None) -> float:
+    if at is None:
+        return float(data)
+    if at == "start":
+        return float(data[0])
+    if at == "end":
+        return float(data[-1])
+    return float(getattr(np, {"max": "nanmax", "min": "nanmin", "mean": "nanmean"}[at])(data))
+
+
+def _variable_value(dataset, spec: dict) -> float | None:
+    """The reduced value of one ``[expect.variables]`` entry in its expected unit."""
+    if dataset is None or spec["variable"] not in dataset:
+        return None
+    var = dataset[spec["variable"]]
+    data = np.asarray(var.values, dtype=float)
+    comp = spec["component"]
+    if comp == "norm":
+        data = np.linalg.norm(data, axis=-1)
+    elif comp is not None:
+        data = data[..., comp]
+    got = _reduce(data, spec["at"])
+    units = var.attrs.get("units", "1")
+    return float((got * u.Unit(units)).to_value(spec["unit"]))
+
+
 def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
-                       conservation: dict) -> list[dict]:
-    """Compare the parsed ``[expect]`` entries with what the run gave."""
+                       conservation: dict, *, diagnosis=None, dataset=None) -> list[dict]:
+    """Compare the parsed ``[expect]`` entries with what the run gave.
+
+    ``diagnosis`` (:func:`attitude.diagnose` of the initial state) gives the nutation range
+    of a torque-free run; ``dataset`` (the run's ephemeris dataset, with the variables of
+    :func:`attitude.diagnostics.add_diagnostics` when :func:`needs_dataset` says so) the
+    nutation range of a run with torques (extremes of ``nutation_angle`` over the run) and
+    the ``[expect.variables]`` values.  Without them those entries get ``got = None``
+    (a failure).
+    """
     results = []
     for spec in scenario.expect:
         key = spec["key"]
-        out = dict(spec)
+        out = {k: v for k, v in spec.items() if k not in ("variable", "at", "component")}
         if key == "regime":
             out["got"] = regime
             out["ok"] = regime == spec["expected"]
-        elif key in PERIOD_KEYS:
+            results.append(out)
+            continue
+        if key in PERIOD_KEYS:
             got = periods.get(key)
-            out["got"] = None if got is None else got / u.Unit(spec["unit"]).to(u.s)
-            out["ok"] = bool(got is not None and
-                             abs(out["got"] - spec["expected"]) <= spec["tolerance"])
+            got = None if got is None else got / u.Unit(spec["unit"]).to(u.s)
+        elif key.startswith("nutation_range."):
+            got = _nutation_bound(scenario, key.rsplit(".", 1)[1], diagnosis, dataset)
+            got = None if got is None else float((got * u.rad).to_value(spec["unit"]))
+        elif key.startswith("variables."):
+            got = _variable_value(dataset, spec)
         else:
             out["got"] = conservation[key]
             out["ok"] = bool(out["got"] <= spec["expected"])
+            results.append(out)
+            continue
+        out["got"] = got
+        out["ok"] = bool(got is not None and np.isfinite(got) and
+                         abs(got - spec["expected"]) <= spec["tolerance"])
         results.append(out)
     return results
+
+
+def _nutation_bound(scenario: Scenario, which: str, diagnosis, dataset) -> float | None:
+    """theta_min / theta_max, rad: analytic (torque-free) or over the run (torques)."""
+    if not scenario.torques:
+        if diagnosis is None or diagnosis.nutation_range is None:
+            return None
+        return float(diagnosis.nutation_range[0 if which == "min" else 1])
+    if dataset is None or "nutation_angle" not in dataset:
+        return None
+    return _reduce(np.asarray(dataset["nutation_angle"].values, dtype=float), which)

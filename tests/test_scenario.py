@@ -187,3 +187,185 @@ def test_bad_torque_tables_name_the_key(tmp_path, table, key, message):
     with pytest.raises(att.ScenarioError, match=message) as info:
         load_scenario(path)
     assert str(info.value).startswith(f"{path}: {key}: "), str(info.value)
+
+
+# --- [expect] nutation_range and [expect.variables] ----------------------------------------
+
+def test_nutation_range_and_variables_torque_free(tmp_path):
+    """Torque-free: nutation_range is the analytic one of att.diagnose; variables are
+    reduced over the run and converted to the expectation's unit."""
+    sc0 = load_scenario(write(tmp_path, GOOD))
+    d = att.diagnose(sc0.body, sc0.state)
+    lo, hi = (float(x) for x in np.degrees(d.nutation_range))
+    L = float(d.angular_momentum)
+    path = write(tmp_path, GOOD + f"""
+[expect]
+nutation_range = {{ min = {lo!r}, max = {hi!r}, unit = "deg", abs_tol = 1e-9 }}
+
+[expect.variables]
+angular_momentum_magnitude = {{ at = "mean", value = {L!r}, rel_tol = 1e-12 }}
+energy_rel_drift = {{ value = 0.0, abs_tol = 1e-13 }}
+
+[expect.variables.w_start]
+variable = "angular_velocity"
+at = "start"
+component = 2
+value = 20.0
+unit = "deg/s"
+abs_tol = 1e-12
+
+[expect.variables.w_norm]
+variable = "angular_velocity"
+at = "max"
+component = "norm"
+value = 0.36
+unit = "rad/s"
+rel_tol = 0.1
+""")
+    sc = load_scenario(path)
+    keys = [e["key"] for e in sc.expect]
+    assert keys == ["nutation_range.min", "nutation_range.max",
+                    "variables.angular_momentum_magnitude", "variables.energy_rel_drift",
+                    "variables.w_start", "variables.w_norm"]
+    result = run_scenario(sc, write_outputs=False)
+    assert result.ok, [e for e in result.expectations if not e["ok"]]
+    for e in result.expectations:
+        assert {"key", "expected", "got", "tolerance", "unit", "ok"} <= set(e)
+        assert "variable" not in e and "at" not in e
+    got = {e["key"]: e["got"] for e in result.expectations}
+    assert got["nutation_range.min"] == pytest.approx(lo, abs=1e-12)
+    assert got["variables.w_start"] == pytest.approx(20.0, rel=1e-14)
+
+
+def test_variables_with_torques_and_a_failing_expectation(tmp_path):
+    """A sphere under a constant body torque: w3(end) = w0 + M t / I (closed form); the
+    nutation range of a run with torques comes from the nutation_angle diagnostic."""
+    w_end = float(np.radians(20.0) + 0.01 * 120.0 / 2.0)
+    text = GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
+                        "principal_moments = [2.0, 2.0, 2.0]").replace(
+        "[5.0, 0.0, 20.0]", "[0.0, 0.0, 20.0]") + f"""
+[[torques]]
+type = "constant"
+torque = {{ value = [0.0, 0.0, 0.01], unit = "N m" }}
+frame = "body"
+
+[expect]
+nutation_range = {{ min = 0.0, max = 0.0, abs_tol = 1e-9 }}
+
+[expect.variables]
+angular_velocity = {{ at = "end", component = 2, value = {w_end!r}, rel_tol = 1e-10 }}
+kinetic_energy = {{ at = "end", value = 1.0, unit = "J", rel_tol = 1e-3 }}
+"""
+    result = run_scenario(load_scenario(write(tmp_path, text)), write_outputs=False)
+    ok = {e["key"]: e["ok"] for e in result.expectations}
+    assert ok == {"nutation_range.min": True, "nutation_range.max": True,
+                  "variables.angular_velocity": True, "variables.kinetic_energy": False}
+    assert "nutation_angle" in result.dataset
+    assert not result.ok
+
+
+@pytest.mark.parametrize("expect, key, message", [
+    ('nutation_range = { min = 1, max = 2 }', "expect.nutation_range.abs_tol", "missing key"),
+    ('nutation_range = { min = 3, max = 2, abs_tol = 0.1 }', "expect.nutation_range",
+     "larger than max"),
+    ('nutation_range = { min = 1, max = 2, abs_tol = 0.1, unit = "s" }',
+     "expect.nutation_range.unit", "cannot be converted"),
+    ('nutation_range = { min = 1, max = 2, abs_tol = 0.1, rel_tol = 0.1 }',
+     "expect.nutation_range.rel_tol", "unknown key"),
+    ('nutaton_range = 3', "expect.nutaton_range", "did you mean 'nutation_range'"),
+    ('[expect.variables]\nnutation_angel = { at = "end", value = 1, abs_tol = 1 }',
+     "expect.variables.nutation_angel", "did you mean 'nutation_angle'"),
+    ('[expect.variables]\nx = { variable = "spin", at = "end", value = 1, abs_tol = 1 }',
+     "expect.variables.x.variable", "unknown variable"),
+    ('[expect.variables]\nkinetic_energy = { value = 1, abs_tol = 1 }',
+     "expect.variables.kinetic_energy.at", "time series"),
+    ('[expect.variables]\nkinetic_energy = { at = "last", value = 1, abs_tol = 1 }',
+     "expect.variables.kinetic_energy.at", "got 'last'"),
+    ('[expect.variables]\nattitude_noise = { at = "end", value = 1, abs_tol = 1 }',
+     "expect.variables.attitude_noise.at", "single number"),
+    ('[expect.variables]\nangular_velocity = { at = "end", value = 1, abs_tol = 1 }',
+     "expect.variables.angular_velocity.component", "is a vector"),
+    ('[expect.variables]\nangular_velocity = { at = "end", component = 3, value = 1, '
+     'abs_tol = 1 }', "expect.variables.angular_velocity.component", "index 0..2"),
+    ('[expect.variables]\nkinetic_energy = { at = "end", component = 0, value = 1, '
+     'abs_tol = 1 }', "expect.variables.kinetic_energy.component", "not a vector"),
+    ('[expect.variables]\nkinetic_energy = { at = "end", value = 1 }',
+     "expect.variables.kinetic_energy", "exactly one of rel_tol, abs_tol"),
+    ('[expect.variables]\nkinetic_energy = { at = "end", value = 1, unit = "deg", '
+     'abs_tol = 1 }', "expect.variables.kinetic_energy.unit", "cannot be converted to 'J'"),
+    ('[expect.variables]\nkinetic_energy = { at = "end", value = "1 J", abs_tol = 1 }',
+     "expect.variables.kinetic_energy.value", "expected a number"),
+    ('[expect.variables]\nkinetic_energy = { at = "end", valu = 1, abs_tol = 1 }',
+     "expect.variables.kinetic_energy.valu", "did you mean 'value'"),
+])
+def test_bad_expectations_name_the_key(tmp_path, expect, key, message):
+    if not expect.startswith("["):
+        expect = "[expect]\n" + expect
+    path = write(tmp_path, GOOD + "\n" + expect + "\n")
+    with pytest.raises(att.ScenarioError, match=message) as info:
+        load_scenario(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: {key}: "), text
+    assert "\n" not in text
+
+
+# --- [state] spin_axis -----------------------------------------------------------------------
+
+SPIN = GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
+                    "inertia = [[2.0, 0.3, 0.0], [0.3, 1.5, 0.1], [0.0, 0.1, 3.0]]").replace(
+    'attitude = { quaternion_scalar_last = [0, 0, 0, 1] }\n'
+    'omega_body = { value = [5.0, 0.0, 20.0], unit = "deg/s" }',
+    'spin_axis = { ra = "250 deg", dec = "-75 deg" }\nspin_period = "2.5 h"')
+
+
+@pytest.mark.parametrize("about, k", [(None, 2), ("A", 0), ("B", 1), ("C", 2)])
+def test_spin_axis_state_points_the_principal_axis(tmp_path, about, k):
+    text = SPIN if about is None else SPIN.replace("[state]", f'[state]\nspin_about = "{about}"')
+    sc = load_scenario(write(tmp_path, text))
+    ra, dec = np.radians([250.0, -75.0])
+    n = [np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)]
+    axis = sc.body.principal_axes[:, k]                   # body frame
+    np.testing.assert_allclose(sc.state.attitude.apply(axis), n, rtol=0, atol=1e-12)
+    w = sc.state.omega_body
+    assert np.linalg.norm(w) == pytest.approx(2 * np.pi / 9000.0, rel=1e-14)
+    np.testing.assert_allclose(sc.state.attitude.apply(w) / np.linalg.norm(w), n, atol=1e-12)
+    d = att.diagnose(sc.body, sc.state)
+    assert d.periods["spin"] == pytest.approx(9000.0, rel=1e-12)
+
+
+def test_spin_axis_with_rate_and_at_the_pole(tmp_path):
+    text = SPIN.replace('spin_period = "2.5 h"', 'spin_rate = "3 deg/s"').replace(
+        'dec = "-75 deg"', 'dec = "90 deg"')
+    sc = load_scenario(write(tmp_path, text))
+    np.testing.assert_allclose(sc.state.attitude.apply(sc.body.principal_axes[:, 2]),
+                               [0, 0, 1], atol=1e-12)
+    assert np.linalg.norm(sc.state.omega_body) == pytest.approx(np.radians(3.0), rel=1e-14)
+
+
+@pytest.mark.parametrize("old, new, key, message", [
+    ("spin_period", "spin_rate = 0.1\nspin_period", "state.spin_rate", "exactly one of"),
+    ('spin_period = "2.5 h"', "", "state.spin_rate", "exactly one of"),
+    ("[state]", "[state]\nomega_body = [0, 0, 1]", "state.omega_body", "not with state.spin_axis"),
+    ("[state]", "[state]\nattitude = { quaternion_scalar_last = [0, 0, 0, 1] }",
+     "state.attitude", "not with state.spin_axis"),
+    ("[state]", '[state]\nspin_about = "D"', "state.spin_about", "expected"),
+    ('dec = "-75 deg"', 'dec = "-95 deg"', "state.spin_axis.dec", "within"),
+    ('dec = "-75 deg"', 'dec = "-75 s"', "state.spin_axis.dec", "cannot be converted"),
+    ('ra = "250 deg", ', "", "state.spin_axis.ra", "missing key"),
+    ('ra = "250 deg"', 'ra = "250 deg", rra = 1', "state.spin_axis.rra", "did you mean 'ra'"),
+    ('spin_period = "2.5 h"', 'spin_period = "-2.5 h"', "state.spin_period", "positive"),
+])
+def test_bad_spin_axis_states(tmp_path, old, new, key, message):
+    assert old in SPIN
+    path = write(tmp_path, SPIN.replace(old, new, 1))
+    with pytest.raises(att.ScenarioError, match=message) as info:
+        load_scenario(path)
+    assert str(info.value).startswith(f"{path}: {key}: "), str(info.value)
+
+
+def test_spin_rate_without_spin_axis(tmp_path):
+    path = write(tmp_path, GOOD.replace(
+        'omega_body = { value = [5.0, 0.0, 20.0], unit = "deg/s" }', 'spin_rate = 0.1'))
+    with pytest.raises(att.ScenarioError, match=r"state.spin_axis: missing key \(needed with "
+                                                r"state.spin_rate\)"):
+        load_scenario(path)

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from attitude.regimes import PERIOD_KEYS, REGIMES
-from attitude.scenario import CONSERVATION_KEYS, SCHEMA
+from attitude.scenario import CONSERVATION_KEYS, EXPECT_KEYS, SCHEMA
 from tests.test_scenario import GOOD
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,7 +27,8 @@ def test_schema_keys_match_the_loader():
     for table in ("scenario", "body", "state", "propagation", "output"):
         assert set(props[table]["properties"]) == set(SCHEMA[table]), table
     expect = props["expect"]["properties"]
-    assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS}
+    assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS, "nutation_range",
+                           "variables"} == set(EXPECT_KEYS)
     assert expect["regime"]["enum"] == list(REGIMES)
 
 
@@ -60,6 +61,9 @@ def test_the_test_scenario_validates(validator):
     ("[output]", "[expect]\nprecession = { value = 1.0 }\n[output]"),  # no tolerance
     ("[output]", '[[torques]]\ntype = "drag"\n[output]'),              # unknown torque
     ("[0, 0, 0, 1]", "[0, 0, 1]"),                                     # quaternion length
+    ("[output]", "[expect]\nnutation_range = { min = 0, max = 1 }\n[output]"),  # no abs_tol
+    ("[output]", "[expect.variables]\nx = { at = \"last\", value = 1, abs_tol = 1 }\n[output]"),
+    ("[state]", '[state]\nspin_axis = { ra = 1, dec = 0 }\nspin_rate = 1'),  # and omega_body
 ])
 def test_mistakes_are_rejected(validator, old, new):
     assert old in GOOD
