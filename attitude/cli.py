@@ -146,7 +146,8 @@ def _cmd_run(args) -> int:
                   "with pip install 'attitude[plot]'", file=sys.stderr)
             return EXIT_INPUT
     scenario = load_scenario(args.scenario)
-    result = run_scenario(scenario, netcdf=args.output)
+    result = run_scenario(scenario, netcdf=args.output,
+                          progress=not args.quiet and sys.stderr.isatty())
     if args.plot:
         from .plot import save_figures
 

@@ -36,7 +36,8 @@ SCHEMA: dict[str, dict[str, Any]] = {
     "state": {"epoch": str, "time_scale": str, "frame": str, "attitude": dict,
               "omega_body": None, "spin_axis": dict, "spin_rate": None, "spin_period": None,
               "spin_about": str},
-    "propagation": {"duration": None, "step": None, "method": str, "rtol": float},
+    "propagation": {"duration": None, "step": None, "method": str, "rtol": float,
+                    "integrator_step": None, "order": int},
     "torques": list,
     "output": {"netcdf": str},
     "expect": dict,
@@ -58,6 +59,8 @@ class Scenario:
     step: float
     method: str | None = None
     rtol: float | None = None
+    integrator_step: float | None = None
+    order: int | None = None
     torques: tuple = ()
     netcdf: Path | None = None
     expect: tuple = ()
@@ -202,6 +205,20 @@ def load_scenario(path: str | Path) -> Scenario:
     rtol = prop.get("rtol")
     if rtol is not None and (not isinstance(rtol, float) or not 0 < rtol < 1):
         raise r.fail("propagation.rtol", f"expected a float between 0 and 1, got {rtol!r}")
+    integrator_step = None
+    if "integrator_step" in prop:
+        integrator_step = r.quantity(prop["integrator_step"], "s", "propagation.integrator_step")
+        if not integrator_step > 0:
+            raise r.fail("propagation.integrator_step", f"must be positive, got "
+                                                        f"{integrator_step} s")
+    order = prop.get("order")
+    if order is not None and (isinstance(order, bool) or order not in (2, 4, 6)):
+        raise r.fail("propagation.order", f"expected 2, 4 or 6, got {order!r}")
+    if (integrator_step is not None or order is not None) and (
+            method not in (None, "splitting") or rtol is not None):
+        raise r.fail("propagation.integrator_step" if integrator_step is not None
+                     else "propagation.order",
+                     "only used by the splitting integrator (method = \"splitting\", no rtol)")
 
     torques = _torques(r, doc.get("torques", []), state.epoch)
     if torques and method == "exact":
@@ -213,7 +230,7 @@ def load_scenario(path: str | Path) -> Scenario:
     expect = _parse_expect(r, r.table(doc, "expect", required=False))
     return Scenario(path=path, name=name, description=description, body=body, state=state,
                     duration=duration, step=step, method=method, rtol=rtol,
-                    torques=tuple(torques),
+                    integrator_step=integrator_step, order=order, torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect)
 
 
@@ -487,7 +504,7 @@ class RunResult:
 
 
 def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
-                 write_outputs: bool = True) -> RunResult:
+                 write_outputs: bool = True, progress: bool = False) -> RunResult:
     """Propagate a scenario, classify it, check its ``[expect]`` table, write outputs.
 
     A torque-free run is described by the analytic :func:`attitude.diagnose` of its
@@ -503,7 +520,8 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
 
     torques = list(scenario.torques)
     eph = propagate(scenario.body, scenario.state, scenario.times, method=scenario.method,
-                    rtol=scenario.rtol, torques=torques)
+                    rtol=scenario.rtol, torques=torques, step=scenario.integrator_step,
+                    order=scenario.order, progress=progress)
     diagnosis = diagnose(scenario.body, scenario.state)
     classification, note = None, ""
     if torques:

@@ -369,3 +369,23 @@ def test_spin_rate_without_spin_axis(tmp_path):
     with pytest.raises(att.ScenarioError, match=r"state.spin_axis: missing key \(needed with "
                                                 r"state.spin_rate\)"):
         load_scenario(path)
+
+
+def test_integrator_step_and_order_reach_the_splitting_integrator(tmp_path):
+    """[propagation] integrator_step / order: a Strang run with a 2 s step on a sphere
+    under a constant torque is still exact (the kick is exact for a sphere)."""
+    text = GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
+                        "principal_moments = [2.0, 2.0, 2.0]").replace(
+        'step = "10 s"', 'step = "10 s"\nintegrator_step = "2 s"\norder = 2') + """
+[[torques]]
+type = "constant"
+torque = { value = [0.0, 0.0, 0.01], unit = "N m" }
+"""
+    sc = load_scenario(write(tmp_path, text))
+    assert sc.integrator_step == 2.0 and sc.order == 2
+    w = run_scenario(sc, write_outputs=False).ephemeris.dataset.angular_velocity.values
+    np.testing.assert_allclose(w[-1, 2], np.radians(20.0) + 0.01 * 120.0 / 2.0, rtol=1e-12)
+    for bad, key in (("order = 2", "order = 3"), ('integrator_step = "2 s"', "rtol = 1e-9")):
+        with pytest.raises(att.ScenarioError, match="propagation"):
+            load_scenario(write(tmp_path, text.replace(bad, key if "order" in key else
+                                                       'integrator_step = "2 s"\n' + key)))
