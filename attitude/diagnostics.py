@@ -810,10 +810,10 @@ DIAGNOSTIC_VARIABLES = {
     "osculating_polhode_period": ("s", "polhode period 4K/lambda of the osculating "
                                        "torque-free motion"),
     "angular_momentum_magnitude": ("kg m2 s-1", "magnitude of the angular momentum |L|"),
-    "angular_momentum_drift": ("1", "relative drift of |L| from the first sample"),
+    "angular_momentum_magnitude_drift": ("1", "relative drift of |L| from the first sample"),
     "energy_drift": ("1", "relative drift of the rotational kinetic energy from the first "
                           "sample"),
-    "angular_momentum_rate": ("kg m2 s-2", "rate of change of |L|"),
+    "angular_momentum_magnitude_rate": ("kg m2 s-2", "rate of change of |L|"),
     "energy_rate": ("W", "rate of change of the rotational kinetic energy"),
     "angular_momentum_direction_drift": ("rad", "angle between L(t) and L(t0), inertial"),
 }
@@ -842,9 +842,9 @@ def _diagnose_one(series: PrincipalSeries, reference_axis, periods):
         "separatrix_distance": inv["separatrix_distance"],
         "osculating_polhode_period": osculating_polhode_period(series.omega, series.moments),
         "angular_momentum_magnitude": drift["L"],
-        "angular_momentum_drift": drift["L_drift"],
+        "angular_momentum_magnitude_drift": drift["L_drift"],
         "energy_drift": drift["E_drift"],
-        "angular_momentum_rate": drift["L_rate"],
+        "angular_momentum_magnitude_rate": drift["L_rate"],
         "energy_rate": drift["E_rate"],
         "angular_momentum_direction_drift": drift["L_direction_drift"],
     }
@@ -863,11 +863,11 @@ def _diagnose_one(series: PrincipalSeries, reference_axis, periods):
 
 
 _SCALAR_META = {
-    "L_rel_drift": ("angular_momentum_rel_drift", "1",
+    "L_rel_drift": ("angular_momentum_magnitude_rel_drift", "1",
                     "largest relative drift of |L| from the first sample"),
     "E_rel_drift": ("energy_rel_drift", "1",
                     "largest relative drift of the kinetic energy from the first sample"),
-    "L_drift_rate": ("angular_momentum_drift_rate", "s-1",
+    "L_drift_rate": ("angular_momentum_magnitude_drift_rate", "s-1",
                      "least-squares rate of the relative drift of |L|"),
     "E_drift_rate": ("energy_drift_rate", "s-1",
                      "least-squares rate of the relative drift of the kinetic energy"),
@@ -898,8 +898,8 @@ def add_diagnostics(eph: Ephemeris, *, reference_axis: int | None = None,
     Ephemeris
         The variables of :data:`DIAGNOSTIC_VARIABLES` (dims ``[body,] time`` and
         ``principal_axis`` for ``momentum_axis_angle``), the scalars
-        ``angular_momentum_rel_drift``, ``energy_rel_drift``,
-        ``angular_momentum_drift_rate``, ``energy_drift_rate``, ``attitude_noise``, and
+        ``angular_momentum_magnitude_rel_drift``, ``energy_rel_drift``,
+        ``angular_momentum_magnitude_drift_rate``, ``energy_drift_rate``, ``attitude_noise``, and
         measured periods ``period_<key>`` with ``period_<key>_uncertainty`` (s), each with
         ``units`` and ``long_name``: they go to netCDF with the rest.
 
