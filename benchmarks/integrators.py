@@ -37,6 +37,8 @@ from scipy.spatial.transform import Rotation
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
+from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
+
 import attitude as att  # noqa: E402
 from attitude.integrate import integrate_reference  # noqa: E402
 from attitude.orbit import KeplerOrbit  # noqa: E402
@@ -45,17 +47,6 @@ from attitude.torques import EARTH_MU, GravityGradient  # noqa: E402
 
 SATURN_MU = 3.7931187e16          # m^3/s^2 (JPL)
 HYPERION_A = 1.481e9              # m
-
-
-def cpu_name() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def timed(fn, repeat=1):

@@ -30,6 +30,8 @@ from scipy.integrate import solve_ivp
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
+from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
+
 from attitude.torquefree import branch_of, free_rotation  # noqa: E402
 
 
@@ -52,17 +54,6 @@ def dop853(I, w, q, t):
                 0.5 * (s * w3 + x * w2 - yq * w1), -0.5 * (x * w1 + yq * w2 + z * w3)]
     return solve_ivp(rhs, (t[0], t[-1]), np.concatenate([w, q]), method="DOP853", rtol=1e-12,
                      atol=1e-14 * np.linalg.norm(w), t_eval=t)
-
-
-def cpu_name():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def main():
