@@ -15,10 +15,12 @@ from __future__ import annotations
 
 from . import (
     _units,  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
+    ensemble,  # noqa: F401  (att.ensemble.regime_fractions, ...)
     torques,  # noqa: F401  (att.torques.GravityGradient, ...)
 )
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
 from .classify import Classification, classify
+from .ensemble import Ensemble
 from .ephemeris import Ephemeris
 from .errors import (
     AttitudeError,
@@ -44,6 +46,7 @@ __all__ = [
     "MassProperties",
     "AttitudeState",
     "Ephemeris",
+    "Ensemble",
     "Event",
     "nutation_crossing",
     "event_table",

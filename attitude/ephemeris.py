@@ -2,15 +2,15 @@
 
 Schema (see API.md):
 
-========================  ===========================================  ==================
-variable                  dims                                         meaning
-========================  ===========================================  ==================
-``time`` (coordinate)     time                                         s since ``epoch``
+========================  ============================================  ==================
+variable                  dims                                          meaning
+========================  ============================================  ==================
+``time`` (coordinate)     time                                          s since ``epoch``
 ``quaternion``            [body,] time, quaternion_component (x y z w)  body -> inertial
-``angular_velocity``      [body,] time, axis (x y z)                   body frame, rad/s
-``angular_momentum``      [body,] time, axis                           inertial, kg m^2/s
-``kinetic_energy``        [body,] time                                 J
-========================  ===========================================  ==================
+``angular_velocity``      [body,] time, axis (x y z)                    body frame, rad/s
+``angular_momentum``      [body,] time, axis                            inertial, kg m^2/s
+``kinetic_energy``        [body,] time                                  J
+========================  ============================================  ==================
 
 Global attributes: ``epoch`` (ISO 8601), ``time_scale``, ``frame``, ``inertia`` (9 floats,
 row-major, body frame), ``principal_moments``, ``quaternion_convention``,
@@ -65,6 +65,7 @@ _LABEL_ATTRS = {
 _LABEL_SUFFIX = "_label"
 _CHUNK_TIME = 8192        # samples per chunk along time in the netCDF file
 _COMPLEVEL = 4
+_CHUNK_ELEMENTS = 1 << 16  # values per netCDF chunk of a batch (512 KiB of float64)
 
 
 def _version() -> str:
@@ -125,7 +126,9 @@ class Ephemeris:
             Body -> inertial, scalar-last.
         angular_velocity : ([N,] T, 3) array
             Body-frame rates, rad/s.
-        body : RigidBody, or a sequence of N bodies for a batch
+        body : RigidBody, a sequence of N bodies, or an :class:`attitude.Ensemble`
+            (anything with ``inertia`` (N, 3, 3) and ``principal_moments`` (N, 3)
+            arrays) for a batch
         epoch : astropy Time
         frame : str
             Inertial frame label.
@@ -134,71 +137,12 @@ class Ephemeris:
         q = _quat.canonical(np.asarray(quaternion, dtype=float))
         w = np.asarray(angular_velocity, dtype=float)
         batch = not isinstance(body, RigidBody)
-        bodies = list(body) if batch else [body]
-        inertia = np.stack([b.inertia for b in bodies])           # (N, 3, 3)
-        if batch:
-            inertia_t = inertia[:, None]                           # (N, 1, 3, 3)
-        else:
-            inertia_t = inertia[0]
-        Lb = np.einsum("...ij,...j->...i", inertia_t, w)
-        L = _quat.rotate(q, Lb)
-        E = 0.5 * np.sum(w * Lb, axis=-1)
-
-        lead = ("body", "time") if batch else ("time",)
-        now = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-        attrs = {
-            "title": title,
-            "epoch": _isot9(epoch),
-            "time_scale": epoch.scale.upper(),
-            "frame": frame,
-            "quaternion_convention": QUATERNION_CONVENTION,
-            "Conventions": "CF-1.10",
-            "history": f"{now} created by attitude {_version()}",
-            "source": source or f"attitude {_version()}",
-        }
-        if not batch:
-            attrs["inertia"] = inertia[0].ravel()
-            attrs["principal_moments"] = bodies[0].principal_moments.copy()
-            if bodies[0].name:
-                attrs["body_name"] = bodies[0].name
-            if bodies[0].mass is not None:
-                attrs["mass"] = bodies[0].mass
-        attrs.update(extra_attrs or {})
-        ds = xr.Dataset(
-            {
-                "quaternion": (lead + ("quaternion_component",), q, {
-                    "long_name": "attitude quaternion, body frame to inertial frame",
-                    "units": "1", "convention": QUATERNION_CONVENTION}),
-                "angular_velocity": (lead + ("axis",), w, {
-                    "long_name": "angular velocity in body-frame components",
-                    "units": "rad s-1"}),
-                "angular_momentum": (lead + ("axis",), L, {
-                    "long_name": "angular momentum in inertial-frame components",
-                    "units": "kg m2 s-1"}),
-                "kinetic_energy": (lead, E, {
-                    "long_name": "rotational kinetic energy", "units": "J"}),
-            },
-            coords={
-                "time": ("time", time, _TIME_ATTRS | {"reference_epoch": attrs["epoch"],
-                                                      "time_scale": attrs["time_scale"]}),
-                "quaternion_component": ("quaternion_component", ["x", "y", "z", "w"],
-                                         _LABEL_ATTRS["quaternion_component"]),
-                "axis": ("axis", ["x", "y", "z"], _LABEL_ATTRS["axis"]),
-            },
-            attrs=attrs,
-        )
-        if batch:
-            ds["inertia"] = (("body", "inertia_component"), inertia.reshape(-1, 9), {
-                "long_name": "inertia tensor in the body frame, row-major",
-                "units": "kg m2"})
-            ds["principal_moments"] = (("body", "moment"), np.stack(
-                [b.principal_moments for b in bodies]), {
-                "long_name": "principal moments of inertia A <= B <= C", "units": "kg m2"})
-            ds = ds.assign_coords(
-                body=("body", np.arange(len(bodies)), {"long_name": "body index",
-                                                       "units": "1"}),
-                body_name=("body", [b.name for b in bodies], _LABEL_ATTRS["body_name"]))
-        return cls(ds)
+        inertia, moments, names, single = _body_arrays(body)
+        L, E = momentum_and_energy(inertia if batch else inertia[0], q, w)
+        return cls(build_dataset(time, q, w, L, E, inertia=inertia, moments=moments,
+                                 names=names, single=single if not batch else None,
+                                 epoch=epoch, frame=frame, title=title, source=source,
+                                 extra_attrs=extra_attrs))
 
     # --- views ---------------------------------------------------------------------
     @property
@@ -316,6 +260,99 @@ class Ephemeris:
         return cls(ds)
 
 
+
+def _body_arrays(body):
+    """``(inertia (N, 3, 3), principal moments (N, 3), names, the single RigidBody or
+    None)`` of a body, a sequence of bodies or an array-backed batch."""
+    if isinstance(body, RigidBody):
+        return body.inertia[None], body.principal_moments[None], [body.name], body
+    if hasattr(body, "principal_moments") and np.ndim(body.principal_moments) == 2:
+        names = list(getattr(body, "names", None) or [""] * len(body.principal_moments))
+        return (np.asarray(body.inertia, dtype=float),
+                np.asarray(body.principal_moments, dtype=float), names, None)
+    bodies = list(body)
+    return (np.stack([b.inertia for b in bodies]),
+            np.stack([b.principal_moments for b in bodies]), [b.name for b in bodies], None)
+
+
+def momentum_and_energy(inertia, q, w):
+    """Inertial angular momentum ``L = R (I w)`` and kinetic energy ``E = w.I w / 2`` of
+    body-frame rates ``w`` ([N,] T, 3) under attitudes ``q`` ([N,] T, 4); ``inertia``
+    (3, 3), or (N, 3, 3) for a batch."""
+    inertia = np.asarray(inertia, dtype=float)
+    inertia_t = inertia[:, None] if inertia.ndim == 3 else inertia
+    Lb = np.einsum("...ij,...j->...i", inertia_t, w)
+    return _quat.rotate(q, Lb), 0.5 * np.sum(w * Lb, axis=-1)
+
+
+def build_dataset(time, q, w, L, E, *, inertia, moments, names, single, epoch, frame,
+                  title, source, extra_attrs=None, extra_vars=None) -> xr.Dataset:
+    """The ephemeris dataset from its arrays (numpy, or dask for a distributed batch).
+
+    ``single``: the RigidBody of a single-body ephemeris (arrays without a ``body``
+    dimension), or None for a batch (leading ``body`` dimension; ``inertia``,
+    ``moments`` and ``names`` per body).  ``extra_vars``: more ``{name: (dims, data,
+    attrs)}`` variables."""
+    batch = single is None
+    lead = ("body", "time") if batch else ("time",)
+    now = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    attrs = {
+        "title": title,
+        "epoch": _isot9(epoch),
+        "time_scale": epoch.scale.upper(),
+        "frame": frame,
+        "quaternion_convention": QUATERNION_CONVENTION,
+        "Conventions": "CF-1.10",
+        "history": f"{now} created by attitude {_version()}",
+        "source": source or f"attitude {_version()}",
+    }
+    if not batch:
+        attrs["inertia"] = np.asarray(single.inertia, dtype=float).ravel()
+        attrs["principal_moments"] = single.principal_moments.copy()
+        if single.name:
+            attrs["body_name"] = single.name
+        if single.mass is not None:
+            attrs["mass"] = single.mass
+    attrs.update(extra_attrs or {})
+    ds = xr.Dataset(
+        {
+            "quaternion": (lead + ("quaternion_component",), q, {
+                "long_name": "attitude quaternion, body frame to inertial frame",
+                "units": "1", "convention": QUATERNION_CONVENTION}),
+            "angular_velocity": (lead + ("axis",), w, {
+                "long_name": "angular velocity in body-frame components",
+                "units": "rad s-1"}),
+            "angular_momentum": (lead + ("axis",), L, {
+                "long_name": "angular momentum in inertial-frame components",
+                "units": "kg m2 s-1"}),
+            "kinetic_energy": (lead, E, {
+                "long_name": "rotational kinetic energy", "units": "J"}),
+        },
+        coords={
+            "time": ("time", np.asarray(time, dtype=float),
+                     _TIME_ATTRS | {"reference_epoch": attrs["epoch"],
+                                    "time_scale": attrs["time_scale"]}),
+            "quaternion_component": ("quaternion_component", ["x", "y", "z", "w"],
+                                     _LABEL_ATTRS["quaternion_component"]),
+            "axis": ("axis", ["x", "y", "z"], _LABEL_ATTRS["axis"]),
+        },
+        attrs=attrs,
+    )
+    if batch:
+        ds["inertia"] = (("body", "inertia_component"), np.reshape(inertia, (-1, 9)), {
+            "long_name": "inertia tensor in the body frame, row-major",
+            "units": "kg m2"})
+        ds["principal_moments"] = (("body", "moment"), np.asarray(moments), {
+            "long_name": "principal moments of inertia A <= B <= C", "units": "kg m2"})
+        ds = ds.assign_coords(
+            body=("body", np.arange(len(names)), {"long_name": "body index",
+                                                  "units": "1"}),
+            body_name=("body", list(names), _LABEL_ATTRS["body_name"]))
+    for name, var in (extra_vars or {}).items():
+        ds[name] = var
+    return ds
+
+
 def _from_file_dataset(ds: xr.Dataset) -> xr.Dataset:
     """Decode char-array labels to strings; map ``<dim>_label`` variables of older files
     back to the coordinates of API.md."""
@@ -353,12 +390,20 @@ def _file_encoding(ds: xr.Dataset, time_chunk: int | None = None) -> dict:
 
 
 def _chunks(dims, shape, time_chunk: int | None = None) -> tuple[int, ...]:
-    def size(d, n):
+    """netCDF chunk shape: up to :data:`_CHUNK_TIME` samples along ``time``, whole inner
+    dimensions, and as many bodies as keep a chunk near :data:`_CHUNK_ELEMENTS` values
+    (a catalogue of 1e5 bodies must not become 1e5 chunks per variable)."""
+    sizes = {d: n for d, n in zip(dims, shape)}
+    out = {}
+    for d, n in sizes.items():
         if d == "time":
-            return time_chunk or max(1, min(n, _CHUNK_TIME))
-        return 1 if d == "body" else n
-
-    return tuple(size(d, n) for d, n in zip(dims, shape))
+            out[d] = time_chunk or max(1, min(n, _CHUNK_TIME))
+        elif d != "body":
+            out[d] = n
+    if "body" in sizes:
+        inner = int(np.prod([out[d] for d in out])) or 1
+        out["body"] = int(max(1, min(sizes["body"], _CHUNK_ELEMENTS // inner)))
+    return tuple(out[d] for d in dims)
 
 
 def write_atomically(path: Path, write) -> Path:

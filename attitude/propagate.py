@@ -86,16 +86,17 @@ def _as_batch(body, state) -> tuple[list[RigidBody], list[AttitudeState], bool]:
     return bodies, states, True
 
 
-def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
-              Sequence[AttitudeState], times, *, torques: Sequence | None = None,
+def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
               method: str | None = None, rtol: float | None = None,
               step: float | u.Quantity | None = None, order: int | None = None,
-              progress: bool = False, events=None) -> Ephemeris:
+              progress: bool = False, events=None, client=None,
+              chunks: int | None = None) -> Ephemeris:
     """Propagate the rotation of one body, or of a batch of bodies, to ``times``.
 
     Parameters
     ----------
-    body : RigidBody or sequence of RigidBody
+    body : RigidBody, sequence of RigidBody, or :class:`attitude.Ensemble`
+        With an ensemble, ``state`` is omitted: ``propagate(ensemble, times)``.
     state : AttitudeState or sequence of AttitudeState (same length, same epoch and frame)
     times : array-like (s since the epoch), Quantity, or astropy Time array
     torques : sequence of torque models, optional
@@ -129,8 +130,21 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
         event ends the ephemeris, its last sample being the event.  Times must be
         >= 0; terminal events are not available for a batch.
 
+    client : dask.distributed.Client or str, optional
+        Scale out on dask: the ``body`` dimension is split into chunks that run the
+        same numpy kernel as tasks on the cluster (a ``Client``, or a scheduler address
+        such as ``"tcp://host:8786"``; :func:`attitude.ensemble.local_cluster` starts
+        a ``LocalCluster``).  The ephemeris is then backed by dask arrays and computed
+        when written or loaded, chunk by chunk.
+    chunks : int, optional
+        Bodies per chunk; alone (no ``client``) it gives a dask-backed ephemeris run by
+        dask's current scheduler.  Default with ``client``: about a million epochs per
+        chunk.
+
     ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol``
-    only by ``"integrator"``; the exact solution ignores them.
+    only by ``"integrator"``; the exact solution ignores them.  An ensemble, or a batch
+    with ``client``/``chunks``, has a ``status`` variable per body (0 ok, 1 invalid
+    input, 2 propagation failed; such bodies are NaN and do not stop the others).
 
     Returns
     -------
@@ -148,23 +162,31 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
     >>> eph.conservation()["energy_rel_drift"] < 1e-13
     True
     """
+    from .ensemble import Ensemble
+
+    if isinstance(body, Ensemble) and times is None:
+        state, times = None, state
+    if times is None:
+        raise InvalidStateError("times: missing; propagate(body, state, times) or "
+                                "propagate(ensemble, times)")
+    ensemble = None
+    if isinstance(body, Ensemble):
+        if state is not None:
+            raise InvalidStateError("an Ensemble carries its states: call "
+                                    "propagate(ensemble, times)")
+        ensemble = body
+    elif client is not None or chunks is not None:
+        bodies, states, _ = _as_batch([body] if isinstance(body, RigidBody) else body,
+                                      [state] if isinstance(state, AttitudeState) else state)
+        ensemble = Ensemble.from_bodies(bodies, states)
+    if ensemble is not None:
+        return _propagate_ensemble(ensemble, times, torques=torques, method=method,
+                                   rtol=rtol, step=step, order=order, progress=progress,
+                                   events=events, client=client, chunks=chunks)
     bodies, states, batch = _as_batch(body, state)
     t = elapsed_seconds(times, states[0].epoch)
     torques = list(torques or [])
-    if method is None:
-        if rtol is not None and (step is not None or order is not None):
-            raise InvalidStateError("rtol= belongs to method='integrator', step= and "
-                                    "order= to method='splitting': give one of them, or "
-                                    "choose the method")
-        if not torques:
-            method = "exact"
-        else:
-            method = "integrator" if rtol is not None else "splitting"
-    if method not in METHODS:
-        raise InvalidStateError(f"method {method!r} is unknown; choose one of {METHODS}")
-    if method == "exact" and torques:
-        raise InvalidStateError("method='exact' is the torque-free solution; use "
-                                "method='splitting' or method='integrator' with torques")
+    method = _choose_method(method, torques, rtol, step, order)
     if step is not None:
         step = _step_seconds(step)
     events = as_events(events)
@@ -205,6 +227,47 @@ def propagate(body: RigidBody | Sequence[RigidBody], state: AttitudeState |
     if records is not None:
         eph = _record_events(eph, records, events, batch)
     return eph
+
+
+def _choose_method(method, torques, rtol, step, order) -> str:
+    if method is None:
+        if rtol is not None and (step is not None or order is not None):
+            raise InvalidStateError("rtol= belongs to method='integrator', step= and "
+                                    "order= to method='splitting': give one of them, or "
+                                    "choose the method")
+        if not torques:
+            method = "exact"
+        else:
+            method = "integrator" if rtol is not None else "splitting"
+    if method not in METHODS:
+        raise InvalidStateError(f"method {method!r} is unknown; choose one of {METHODS}")
+    if method == "exact" and torques:
+        raise InvalidStateError("method='exact' is the torque-free solution; use "
+                                "method='splitting' or method='integrator' with torques")
+    return method
+
+
+def _propagate_ensemble(ensemble, times, *, torques, method, rtol, step, order, progress,
+                        events, client, chunks) -> Ephemeris:
+    from .ensemble import propagate_ensemble
+
+    if events:
+        raise InvalidStateError("events: not available for an ensemble or with client=/"
+                                "chunks=; propagate the bodies of interest one by one")
+    t = elapsed_seconds(times, ensemble.epoch)
+    torques = list(torques or [])
+    method = _choose_method(method, torques, rtol, step, order)
+    options = {}
+    if method == "splitting":
+        options = {"step": None if step is None else _step_seconds(step),
+                   "order": 4 if order is None else order,
+                   "progress": progress and client is None and chunks is None}
+    elif method == "integrator" and rtol is not None:
+        options = {"rtol": rtol}
+    return propagate_ensemble(ensemble, t, method=method, torques=torques, options=options,
+                              client=client, chunks=chunks,
+                              source=f"attitude.propagate, method={method}"
+                                     f"{_DESCRIPTION[method]}")
 
 
 def _record_events(eph: Ephemeris, records: list, events: list, batch: bool) -> Ephemeris:
@@ -371,14 +434,8 @@ def _step_seconds(step) -> float:
 
 def _exact(bodies: list[RigidBody], q0: np.ndarray, w0: np.ndarray, t: np.ndarray):
     """Torque-free closed form, in principal frames, mapped back to body frames."""
-    from .torquefree import free_rotation
+    from .ensemble import exact_arrays
 
     q_bp = np.stack([b.body_to_principal.as_quat() for b in bodies])  # body -> principal
-    q_pb = _quat.conjugate(q_bp)
     moments = np.stack([b.principal_moments for b in bodies])
-    w0p = _quat.rotate(q_bp, w0)
-    q0p = _quat.multiply(q0, q_pb)                                      # principal -> inertial
-    qp, wp = free_rotation(moments, w0p, q0p, t)                        # (N, T, 4), (N, T, 3)
-    q = _quat.multiply(qp, q_bp[:, None, :])
-    w = _quat.rotate(q_pb[:, None, :], wp)
-    return q, w
+    return exact_arrays(moments, q_bp, q0, w0, t)
