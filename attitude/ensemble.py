@@ -39,7 +39,6 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 from astropy import units as u
-from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 from . import _quat
@@ -170,7 +169,8 @@ class Ensemble:
         invalid, moments, b2p = _check_rows(inertia, quaternion, omega)
         if invalid and on_invalid == "raise":
             i, why = next(iter(invalid.items()))
-            error = InvalidInertiaError if why.startswith("inertia") else InvalidStateError
+            error = (InvalidInertiaError if why.startswith(("inertia", "principal moments"))
+                     else InvalidStateError)
             raise error(f"body {i}: {why}")
         if invalid:
             shown = "; ".join(f"body {i}: {why}" for i, why in list(invalid.items())[:5])
@@ -658,7 +658,7 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
                                     rotation_angle, moment_c)))
     m, bad = _moments(ra_, rb, mc)
     bad.update(_invalid_where(~np.isfinite(rate), lambda i: "spin rate must be finite"))
-    q = (Rotation.from_matrix(_l_frame(ra, dec)) * Rotation.from_euler("Z", psi)).as_quat()
+    q = (Rotation.from_matrix(_l_frame(ra, dec)) * Rotation.from_euler("Z", psi[:, None])).as_quat()
     omega = np.stack([np.zeros_like(rate), np.zeros_like(rate), rate], axis=-1)
     return m, q, omega, dict(sorted(bad.items()))
 
@@ -797,8 +797,8 @@ def _classified_regimes(eph) -> np.ndarray:
 
 def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:
     """Quantiles of each period over the bodies that have it: a DataArray
-    ``(period, quantile)`` in seconds, with the count of bodies per period as the
-    coordinate ``count``.  ``source``: an :class:`Ensemble` or :func:`diagnose_ensemble`
+    ``(period, quantile)`` in seconds, with the number of bodies that have each period
+    as the coordinate ``bodies``.  ``source``: an :class:`Ensemble` or :func:`diagnose_ensemble`
     output."""
     d = diagnose_ensemble(source) if isinstance(source, Ensemble) else source
     keys = [k for k in ("polhode", "precession", "rotation", "spin")
@@ -809,7 +809,7 @@ def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:
     counts = [int(np.isfinite(d[k].values).sum()) for k in keys]
     return xr.DataArray(values, dims=("period", "quantile"),
                         coords={"period": keys, "quantile": q,
-                                "count": ("period", counts)},
+                                "bodies": ("period", counts)},
                         attrs={"units": "s", "long_name": "period quantiles over bodies"})
 
 
@@ -982,13 +982,15 @@ MODEL_UNITS = {k: {"rad/s": "rad s-1", "": "1"}.get(v, v)
 
 def _dask_arrays(bounds, args, T, client):
     """The chunk tasks as dask arrays ``q w L E status`` along ``body``."""
-    import dask
-    import dask.array as da
+    try:
+        import dask
+        import dask.array as da
+    except ImportError:
+        raise AttitudeError("client=/chunks= need the optional 'dask' package: pip install "
+                            "'attitude[dask]'") from None
 
     if isinstance(client, str):
-        from distributed import Client
-
-        client = Client(client)
+        client = _client_for(client)
     shapes = {"q": (T, 4), "w": (T, 3), "L": (T, 3), "E": (T,), "status": ()}
     dtypes = {"status": np.int8}
     pieces = {k: [] for k in shapes}
@@ -998,6 +1000,27 @@ def _dask_arrays(bounds, args, T, client):
             pieces[k].append(da.from_delayed(part[k], shape=(b - a,) + shape,
                                              dtype=dtypes.get(k, np.float64)))
     return {k: da.concatenate(v, axis=0) for k, v in pieces.items()}
+
+
+def _client_for(address: str):
+    """The current dask client if it is connected to ``address``, else a new one (which
+    becomes the default, so the lazy ephemeris is computed there)."""
+    try:
+        from distributed import Client, default_client
+    except ImportError:
+        raise AttitudeError("client: a scheduler address needs the optional 'distributed' "
+                            "package: pip install 'attitude[dask]'") from None
+    try:
+        current = default_client()
+        if current.scheduler.address == address:
+            return current
+    except ValueError:
+        pass
+    try:
+        return Client(address, timeout="10s")
+    except OSError as exc:
+        raise AttitudeError(f"client: cannot reach the dask scheduler at {address} "
+                            f"({exc})") from None
 
 
 @contextlib.contextmanager
