@@ -908,7 +908,9 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
         Relative tolerance of ``method="integrator"``; ``"auto"``: 1e-10 (ample for
         separations of 1e-8, and several times faster than its default 1e-13); None:
         propagate's default.
-    control : "torque-free", None or (body, state, torques)
+    control : "torque-free", None or tuple
+        The regular control run: ``"torque-free"`` (default), ``None`` (none), or a
+        ``(body, state, torques)`` tuple.
     seed : int
         Seed of the random initial displacement direction.
 

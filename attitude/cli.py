@@ -66,6 +66,19 @@ def _number(x) -> str:
     return f"{x:.10g}" if isinstance(x, float) else str(x)
 
 
+def _expectation_cells(e: dict) -> tuple[str, str, str, str]:
+    """``(key, expected, tolerance, got)`` of one expectation, as text (units included)."""
+    unit = f" {e['unit']}" if "unit" in e else ""
+    if "tolerance" in e:
+        expected, tolerance = f"{_number(e['expected'])}{unit}", f"+/- {e['tolerance']:.3g}{unit}"
+    elif e["key"] == "regime":
+        expected, tolerance = e["expected"], "exact"
+    else:
+        expected, tolerance = f"<= {e['expected']:.3g}", "upper bound"
+    got = "absent" if e["got"] is None else _number(e["got"]) + unit
+    return e["key"], expected, tolerance, got
+
+
 def _expectation_line(e: dict) -> str:
     """``ok   precession: expected 27.38 +/- 0.0821 h, got 27.38``."""
     status = "ok  " if e["ok"] else "FAIL"
@@ -80,28 +93,30 @@ def _expectation_line(e: dict) -> str:
     return f"{status} {e['key']}: expected {expected}, got {got}"
 
 
-def _summary(result) -> str:
+def _summary_rows(result) -> list[tuple[str, str]]:
+    """The summary of ``attitude run`` as ``(quantity, value)`` rows, without the
+    expectations (one table, plain or rich, is made from them)."""
     sc, eph, d = result.scenario, result.ephemeris, result.diagnosis
     body, state = sc.body, sc.state
     A, B, C = body.principal_moments
     w = state.omega_body
     wn = math.degrees(float((w @ w) ** 0.5))
     method = sc.method or ("splitting" if sc.torques else "exact")
-    lines = [
-        f"Scenario   {sc.name}  ({sc.path})",
-        f"Body       A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 ({body.symmetry})"
-        + (f", mass {body.mass:.6g} kg" if body.mass is not None else ""),
-        f"State      epoch {state.epoch.isot} {state.epoch.scale.upper()}, frame {state.frame},"
-        f" |omega| = {wn:.6g} deg/s",
-        f"Run        {len(eph)} epochs over {_format_seconds(sc.duration)}, step "
-        f"{_format_seconds(sc.step)}, method {method}",
+    rows = [
+        ("Scenario", f"{sc.name}  ({sc.path})"),
+        ("Body", f"A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 ({body.symmetry})"
+         + (f", mass {body.mass:.6g} kg" if body.mass is not None else "")),
+        ("State", f"epoch {state.epoch.isot} {state.epoch.scale.upper()}, frame {state.frame},"
+                  f" |omega| = {wn:.6g} deg/s"),
+        ("Run", f"{len(eph)} epochs over {_format_seconds(sc.duration)}, step "
+                f"{_format_seconds(sc.step)}, method {method}"),
     ]
     periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in result.periods.items())
     if sc.torques:
-        lines.append(f"Motion     initial state (torque-free): {d.regime}")
+        rows.append(("Motion", f"initial state (torque-free): {d.regime}"))
         c = result.classification
         if c is None:
-            lines.append(f"Classified {result.note}")
+            rows.append(("Classified", result.note))
         else:
             extra = ""
             ly = c.lyapunov
@@ -109,24 +124,69 @@ def _summary(result) -> str:
                 extra = f"; Lyapunov time {_format_seconds(ly.lyapunov_time)}"
             elif ly is not None:
                 extra = "; regular (Lyapunov exponent not above the torque-free control)"
-            lines.append(f"Classified regime {c.regime} (confidence {c.confidence:.2f})"
-                         + (f"; periods: {periods}" if periods else "") + extra)
+            rows.append(("Classified", f"regime {c.regime} (confidence {c.confidence:.2f})"
+                         + (f"; periods: {periods}" if periods else "") + extra))
             if len(c.segments) > 1:
-                lines.append("Segments   " + " -> ".join(
-                    f"{reg} from {_format_seconds(start)}" for start, _, reg in c.segments))
+                rows.append(("Segments", " -> ".join(
+                    f"{reg} from {_format_seconds(start)}" for start, _, reg in c.segments)))
     else:
-        lines.append(f"Motion     regime {d.regime}" + (f"; periods: {periods}" if periods else ""))
+        rows.append(("Motion", f"regime {d.regime}" + (f"; periods: {periods}" if periods
+                                                        else "")))
     c = result.conservation
-    label = "Changed   " if sc.torques else "Conserved "
-    lines.append(f"{label} L (inertial vector): |L0| = {d.angular_momentum:.10g} kg m^2/s, "
+    rows.append(("Changed" if sc.torques else "Conserved",
+                 f"L (inertial vector): |L0| = {d.angular_momentum:.10g} kg m^2/s, "
                  f"max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}; "
                  f"E0 = {d.kinetic_energy:.10g} J, max |E - E0|/E0 = "
-                 f"{c['energy_rel_drift']:.2g}")
-    for e in result.expectations:
-        lines.append("Expect     " + _expectation_line(e))
+                 f"{c['energy_rel_drift']:.2g}"))
+    return rows
+
+
+def _summary(result) -> str:
+    """The plain-text summary: one ``Label      value`` line per row, then one line per
+    expectation and per output file."""
+    rows = _summary_rows(result)
+    rows += [("Expect", _expectation_line(e)) for e in result.expectations]
+    rows += [("Wrote", str(p)) for p in result.outputs]
+    return "\n".join(f"{label:<10} {value}" for label, value in rows)
+
+
+def _rich_summary(result, console) -> None:
+    """The summary as rich tables on ``console`` (a ``rich.console.Console``): the run
+    (quantity, value), then the expectations (expected, tolerance, got, ok)."""
+    from rich.table import Table
+    from rich.text import Text
+
+    table = Table(title=Text(f"attitude run: {result.scenario.name}"), title_justify="left")
+    table.add_column("quantity", style="bold", no_wrap=True)
+    table.add_column("value", overflow="fold")
+    for label, value in _summary_rows(result):
+        table.add_row(label, Text(value))
     for p in result.outputs:
-        lines.append(f"Wrote      {p}")
-    return "\n".join(lines)
+        table.add_row("Wrote", Text(str(p)))
+    console.print(table)
+    if result.expectations:
+        exp = Table(title="expectations", title_justify="left")
+        for name in ("key", "expected", "tolerance", "got"):
+            exp.add_column(name, overflow="fold")
+        exp.add_column("ok", no_wrap=True)
+        for e in result.expectations:
+            ok = Text("ok", style="bold green") if e["ok"] else Text("FAIL", style="bold red")
+            exp.add_row(*map(Text, _expectation_cells(e)), ok)
+        console.print(exp)
+
+
+def _print_summary(result) -> None:
+    """Rich tables on a terminal when ``rich`` is installed (pip install
+    'attitude[cli]'), else the plain-text summary (pipes, files, no rich)."""
+    if sys.stdout.isatty():
+        try:
+            from rich.console import Console
+        except ImportError:
+            pass
+        else:
+            _rich_summary(result, Console())
+            return
+    print(_summary(result))
 
 
 def _plot_stem(args, result) -> Path:
@@ -160,7 +220,7 @@ def _cmd_run(args) -> int:
         report = json.dumps(result.report(), indent=2, default=float)
         write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(report + "\n"))
     if not args.quiet:
-        print(_summary(result))
+        _print_summary(result)
     return EXIT_OK if result.ok else EXIT_EXPECTATION
 
 

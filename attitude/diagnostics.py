@@ -187,7 +187,7 @@ def invariants(omega: np.ndarray, moments) -> dict[str, np.ndarray]:
     Returns
     -------
     dict of ndarrays (shape ``omega.shape[:-1]``)
-        ``L`` (|L|, kg m^2/s), ``E`` (J), ``dynamic_inertia`` ``L^2/2E`` (kg m^2),
+        ``L`` (``|L|``, kg m^2/s), ``E`` (J), ``dynamic_inertia`` ``L^2/2E`` (kg m^2),
         ``excitation`` ``(E - E_min)/(E_max - E_min)`` at fixed ``L`` (D 6),
         ``separatrix_distance`` (signed ``m1 = 1 - k^2``: > 0 SAM, < 0 LAM, D 7; NaN for
         an axisymmetric or spherical body), ``nutation_max_C`` and ``nutation_max_A``:

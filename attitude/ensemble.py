@@ -77,7 +77,7 @@ _EPOCHS_PER_CHUNK = 1_000_000
 #: (Pravec et al. 2014): the inertial direction of L (right ascension / declination, or
 #: ecliptic longitude / latitude when the frame is ecliptic), the energy ratio E/E0
 #: (E0 = L^2 / 2C; 1 is spin about C, C/B the separatrix, C/A spin about A), the moment
-#: ratios A/C and B/C, the precession period P_phi (which sets |L|) and the Euler angles
+#: ratios A/C and B/C, the precession period P_phi (which sets ``|L|``) and the Euler angles
 #: phi (precession) and psi (rotation) of the reference axis at the epoch; the nutation
 #: angle theta follows from the energy.  ``"spin"``: a principal-axis spin about C along a
 #: spin axis (RA/Dec) at a rate, with a rotation phase.

@@ -31,7 +31,7 @@ __all__ = ["integrate_reference", "DEFAULT_RTOL", "DEFAULT_ATOL_SCALE"]
 #: Relative tolerance of the reference integrator.
 DEFAULT_RTOL = 1e-13
 #: Absolute tolerance per component, as a fraction of the component's scale
-#: (1 for quaternions, |omega0| for rates).
+#: (1 for quaternions, ``|omega0|`` for rates).
 DEFAULT_ATOL_SCALE = 1e-15
 
 Torque = Callable[[float, np.ndarray, np.ndarray, RigidBody], np.ndarray]

@@ -16,5 +16,5 @@ REGIMES = ("PA-short", "PA-long", "SAM", "LAM", "separatrix", "axisymmetric", "s
 
 #: Period keys, seconds.  ``polhode``: period of omega in the body frame; ``precession``:
 #: mean period P_phi of the long/short axis about L; ``rotation``: P_psi; ``spin``:
-#: 2 pi / |omega| for principal-axis spin.
+#: ``2 pi / |omega|`` for principal-axis spin.
 PERIOD_KEYS = ("polhode", "precession", "rotation", "spin")

@@ -41,6 +41,8 @@ SCHEMA: dict[str, dict[str, Any]] = {
     "torques": list,
     "output": {"netcdf": str},
     "expect": dict,
+    "ensemble": {"size": int, "seed": int, "model": str, "mean": dict, "sigma": dict,
+                 "table": str, "chunk": int, "include_nominal": bool},
 }
 _BODY_KINDS = ("principal_moments", "inertia", "shape", "parts")
 _PART_PLACEMENT = ("primitive", "offset", "orientation")
@@ -64,6 +66,10 @@ class Scenario:
     torques: tuple = ()
     netcdf: Path | None = None
     expect: tuple = ()
+    ensemble: Any = None
+    """An :class:`attitude.Ensemble` when the file has an ``[ensemble]`` table (``body``
+    and ``state`` are then its nominal member: body 0, or the first valid one)."""
+    chunk: int | None = None
 
     @property
     def times(self) -> np.ndarray:
@@ -169,20 +175,25 @@ def load_scenario(path: str | Path) -> Scenario:
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"not valid TOML ({exc})", path=str(path)) from None
     r.check_keys(doc, SCHEMA, "")
-    for name in ("scenario", "body", "state", "propagation", "output"):
+    for name in ("scenario", "body", "state", "propagation", "output", "ensemble"):
         if name in doc:
             r.check_keys(r.table(doc, name), SCHEMA[name], name)
 
     meta = r.table(doc, "scenario", required=False)
     name = r.string(meta, "name", "scenario", default=path.stem)
     description = r.string(meta, "description", "scenario", default="")
-    body = _body(r, r.table(doc, "body"), path.parent)
-    try:
-        state = _state(r, r.table(doc, "state"), body)
-    except ScenarioError:
-        raise
-    except AttitudeError as exc:  # physical validation by AttitudeState
-        raise r.fail("state", str(exc)) from None
+    ensemble, chunk = None, None
+    if "ensemble" in doc:
+        ensemble, chunk = _ensemble(r, doc, path.parent)
+        body, state = _nominal(r, ensemble)
+    else:
+        body = _body(r, r.table(doc, "body"), path.parent)
+        try:
+            state = _state(r, r.table(doc, "state"), body)
+        except ScenarioError:
+            raise
+        except AttitudeError as exc:  # physical validation by AttitudeState
+            raise r.fail("state", str(exc)) from None
 
     prop = r.table(doc, "propagation")
     for key in ("duration", "step"):
@@ -228,10 +239,99 @@ def load_scenario(path: str | Path) -> Scenario:
     out = r.table(doc, "output", required=False)
     netcdf = r.string(out, "netcdf", "output")
     expect = _parse_expect(r, r.table(doc, "expect", required=False))
+    if ensemble is None and any(e["key"].startswith("regime_fractions") for e in expect):
+        raise r.fail("expect.regime_fractions", "only for scenarios with an [ensemble] table")
     return Scenario(path=path, name=name, description=description, body=body, state=state,
                     duration=duration, step=step, method=method, rtol=rtol,
                     integrator_step=integrator_step, order=order, torques=tuple(torques),
-                    netcdf=(path.parent / netcdf) if netcdf else None, expect=expect)
+                    netcdf=(path.parent / netcdf) if netcdf else None, expect=expect,
+                    ensemble=ensemble, chunk=chunk)
+
+
+def _ensemble(r: _Reader, doc: dict, folder: Path):
+    """The ``[ensemble]`` table: a sampled population (``model``, ``size``, ``seed``,
+    ``[ensemble.mean]``, ``[ensemble.sigma]``) or a table of bodies (``table``); the
+    epoch and frame come from ``[state]``, which then holds nothing else."""
+    import warnings
+
+    from .ensemble import _DEFAULTS as _ENSEMBLE_DEFAULTS
+    from .ensemble import MODELS, Ensemble, InvalidBodiesWarning
+
+    if "body" in doc:
+        raise r.fail("body", "not with [ensemble]: the ensemble defines the bodies")
+    table = r.table(doc, "ensemble")
+    state = r.table(doc, "state")
+    for key in state:
+        if key not in ("epoch", "time_scale", "frame"):
+            raise r.fail(f"state.{key}", "not with [ensemble]: [state] gives only epoch, "
+                                         "time_scale and frame; the ensemble the states")
+    epoch, frame = _epoch_frame(r, state)
+    chunk = table.get("chunk")
+    if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, int)
+                              or chunk < 1):
+        raise r.fail("ensemble.chunk", f"expected a positive integer, got {chunk!r}")
+    if ("table" in table) == ("mean" in table):
+        raise r.fail("ensemble", "give exactly one of table (a CSV/Parquet file of bodies) "
+                                 "and [ensemble.mean] (a sampled population)")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InvalidBodiesWarning)  # reported by the run
+        if "table" in table:
+            for key in ("size", "seed", "model", "sigma", "include_nominal"):
+                if key in table:
+                    raise r.fail(f"ensemble.{key}", "only with [ensemble.mean] (sampling)")
+            try:
+                return Ensemble.from_table(folder / r.string(table, "table", "ensemble"),
+                                           epoch=epoch, frame=frame), chunk
+            except AttitudeError as exc:
+                raise r.fail("ensemble.table", str(exc)) from None
+        model = r.string(table, "model", "ensemble", default="tumbling")
+        if model not in MODELS:
+            raise r.fail("ensemble.model", f"{model!r} is unknown; choose one of "
+                                           f"{', '.join(MODELS)}")
+        spec = MODELS[model]
+        for key in ("size", "seed"):
+            value = table.get(key)
+            if value is None:
+                raise r.fail(f"ensemble.{key}", "missing key" + (
+                    " (a fixed seed makes the run reproducible)" if key == "seed" else ""))
+            if isinstance(value, bool) or not isinstance(value, int) or value < (
+                    1 if key == "size" else 0):
+                kind = "positive" if key == "size" else "non-negative"
+                raise r.fail(f"ensemble.{key}", f"expected a {kind} integer, got {value!r}")
+        parsed = {}
+        for part in ("mean", "sigma"):
+            sub = table.get(part, {})
+            if not isinstance(sub, dict):
+                raise r.fail(f"ensemble.{part}", "expected a table")
+            r.check_keys(sub, spec, f"ensemble.{part}")
+            parsed[part] = {k: r.quantity(v, spec[k], f"ensemble.{part}.{k}")
+                            for k, v in sub.items()}
+        for k in spec:
+            if k not in parsed["mean"] and k not in _ENSEMBLE_DEFAULTS:
+                raise r.fail(f"ensemble.mean.{k}", f"missing key (a parameter of the "
+                                                   f"{model!r} model)")
+        for k in parsed["sigma"]:
+            if k not in parsed["mean"]:
+                raise r.fail(f"ensemble.sigma.{k}", "no ensemble.mean value for it")
+        nominal = table.get("include_nominal", True)
+        if not isinstance(nominal, bool):
+            raise r.fail("ensemble.include_nominal", f"expected true or false, got {nominal!r}")
+        try:
+            ens = Ensemble.sample(table["size"], rng=table["seed"], model=model,
+                                  mean=parsed["mean"], sigma=parsed["sigma"] or None,
+                                  epoch=epoch, frame=frame, include_nominal=nominal)
+        except AttitudeError as exc:
+            raise r.fail("ensemble.mean", str(exc)) from None
+    return ens, chunk
+
+
+def _nominal(r: _Reader, ensemble) -> tuple[RigidBody, AttitudeState]:
+    valid = np.nonzero(ensemble.valid)[0]
+    if valid.size == 0:
+        first = next(iter(ensemble.invalid.items()))
+        raise r.fail("ensemble", f"no valid body (body {first[0]}: {first[1]})")
+    i = int(valid[0])
+    return ensemble.bodies[i], ensemble.states[i]
 
 
 def _torques(r: _Reader, tables, epoch) -> tuple:
@@ -419,12 +519,8 @@ def _spin_state(r: _Reader, table: dict, body: RigidBody) -> tuple[Rotation, np.
     return spin_axis_state(body, ra, dec, rate, about)
 
 
-def _state(r: _Reader, table: dict, body: RigidBody) -> AttitudeState:
-    spin = any(k in table for k in _SPIN_KEYS)
-    for key in ("epoch",) if spin else ("epoch", "omega_body"):
-        if key not in table:
-            raise r.fail(f"state.{key}", "missing key" + (
-                "" if key == "epoch" else " (or give spin_axis with spin_rate/spin_period)"))
+def _epoch_frame(r: _Reader, table: dict) -> tuple[Time, str]:
+    """``state.epoch`` (in ``state.time_scale``, default TDB) and ``state.frame``."""
     scale = r.string(table, "time_scale", "state", default="tdb").lower()
     if scale not in Time.SCALES:
         raise r.fail("state.time_scale", f"{scale!r} is not a time scale; use one of "
@@ -440,6 +536,16 @@ def _state(r: _Reader, table: dict, body: RigidBody) -> AttitudeState:
         frame = check_frame(frame)
     except AttitudeError as exc:
         raise r.fail("state.frame", str(exc)) from None
+    return epoch, frame
+
+
+def _state(r: _Reader, table: dict, body: RigidBody) -> AttitudeState:
+    spin = any(k in table for k in _SPIN_KEYS)
+    for key in ("epoch",) if spin else ("epoch", "omega_body"):
+        if key not in table:
+            raise r.fail(f"state.{key}", "missing key" + (
+                "" if key == "epoch" else " (or give spin_axis with spin_rate/spin_period)"))
+    epoch, frame = _epoch_frame(r, table)
     if spin:
         attitude, omega = _spin_state(r, table, body)
     else:
@@ -471,6 +577,8 @@ class RunResult:
     dataset: Any = None
     """The dataset the ``[expect]`` variables were read from (the ephemeris dataset, with
     the :func:`~attitude.diagnostics.add_diagnostics` variables when needed), or None."""
+    ensemble: dict | None = None
+    """Summary of an ensemble run (:func:`ensemble_summary`), or None."""
 
     @property
     def ok(self) -> bool:
@@ -479,21 +587,28 @@ class RunResult:
     @property
     def regime(self) -> str | None:
         """The analytic regime of a torque-free run; the classified regime (including
-        ``chaotic``) of a run with torques."""
+        ``chaotic``) of a run with torques; the most common regime of an ensemble."""
+        if self.ensemble is not None:
+            fractions = self.ensemble["regime_fractions"]
+            return next(iter(fractions)) if fractions else None
         if not self.scenario.torques:
             return self.diagnosis.regime
         return self.classification.regime if self.classification is not None else None
 
     @property
     def periods(self) -> dict:
-        """Analytic periods of a torque-free run; measured periods of a run with torques."""
+        """Analytic periods of a torque-free run; measured periods of a run with torques;
+        the median periods over the bodies of an ensemble."""
+        if self.ensemble is not None:
+            return {k: q["0.5"] for k, q in self.ensemble["period_quantiles"].items()}
         if not self.scenario.torques:
             return dict(self.diagnosis.periods)
         return dict(self.classification.periods) if self.classification is not None else {}
 
     def report(self) -> dict:
-        """The ``--report`` JSON document (API.md)."""
-        return {
+        """The ``--report`` JSON document (API.md), with an ``ensemble`` entry for an
+        ensemble run."""
+        doc = {
             "scenario": self.scenario.name,
             "regime": self.regime,
             "periods": self.periods,
@@ -501,23 +616,31 @@ class RunResult:
             "expect": self.expectations,
             "outputs": [str(p) for p in self.outputs],
         }
+        if self.ensemble is not None:
+            doc["ensemble"] = self.ensemble
+        return doc
 
 
 def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
-                 write_outputs: bool = True, progress: bool = False) -> RunResult:
+                 write_outputs: bool = True, progress: bool = False,
+                 client=None) -> RunResult:
     """Propagate a scenario, classify it, check its ``[expect]`` table, write outputs.
 
     A torque-free run is described by the analytic :func:`attitude.diagnose` of its
     initial state.  A run with torques is classified from its ephemeris by
     :func:`attitude.classify` with the finite-time Lyapunov test (``chaotic``), so its
     regime and periods are measured ones.  ``write_outputs=False`` writes no file (what
-    ``attitude check`` does).
+    ``attitude check`` does).  An ensemble scenario runs on ``client`` (a dask client)
+    when one is given, else in this process (:func:`ensemble_summary`).
     """
     from .classify import classify
     from .diagnostics import DiagnosticsError
     from .propagate import propagate
     from .torquefree import diagnose
 
+    if scenario.ensemble is not None:
+        return _run_ensemble(scenario, netcdf=netcdf, write_outputs=write_outputs,
+                             client=client)
     torques = list(scenario.torques)
     eph = propagate(scenario.body, scenario.state, scenario.times, method=scenario.method,
                     rtol=scenario.rtol, torques=torques, step=scenario.integrator_step,
@@ -551,6 +674,87 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
     if target is not None and write_outputs:
         result.outputs.append(eph.to_netcdf(target))
     return result
+
+
+def _run_ensemble(scenario: Scenario, *, netcdf, write_outputs: bool, client) -> RunResult:
+    from .propagate import propagate
+    from .torquefree import diagnose
+
+    chunks = scenario.chunk if (client is not None or scenario.chunk) else None
+    eph = propagate(scenario.ensemble, scenario.times, method=scenario.method,
+                    rtol=scenario.rtol, torques=list(scenario.torques),
+                    step=scenario.integrator_step, order=scenario.order, client=client,
+                    chunks=chunks)
+    outputs = []
+    target = Path(netcdf) if netcdf is not None else scenario.netcdf
+    if target is not None and write_outputs:
+        outputs.append(eph.to_netcdf(target))
+        from .ephemeris import Ephemeris
+
+        if client is not None or chunks is not None:   # statistics from the file, lazily
+            import xarray as xr
+
+            eph = Ephemeris(xr.open_dataset(outputs[-1], engine="netcdf4",
+                                            decode_times=False, chunks={}))
+    summary = ensemble_summary(scenario, eph)
+    diagnosis = diagnose(scenario.body, scenario.state)
+    result = RunResult(scenario, eph, diagnosis, None, summary.pop("conservation"), [],
+                       outputs, "", None, summary)
+    result.expectations.extend(check_expectations(
+        scenario, result.regime, result.periods, result.conservation, diagnosis=None,
+        dataset=None, fractions=summary["regime_fractions"]))
+    return result
+
+
+def ensemble_summary(scenario: Scenario, eph) -> dict:
+    """Regime fractions, period quantiles (analytic for torque-free runs, else regimes
+    classified per body), the attitude spread from the nominal at the end, the worst
+    conservation over the valid bodies, and the invalid bodies: plain JSON types."""
+    from . import ensemble as en
+
+    ens = scenario.ensemble
+    if scenario.torques:
+        fractions = en.regime_fractions(eph)
+        quantiles = {}
+    else:
+        diag = en.diagnose_ensemble(ens)
+        fractions = en.regime_fractions(diag)
+        pq = en.period_quantiles(diag, q=[0.05, 0.5, 0.95])
+        quantiles = {str(k): {f"{q:g}": float(v) for q, v in zip(pq["quantile"].values,
+                                                                  pq.sel(period=k).values)}
+                     for k in pq["period"].values}
+    ds = eph.dataset
+    ok = ds["status"] == en.STATUS_OK
+    L, E = ds["angular_momentum"], ds["kinetic_energy"]
+    L0, E0 = L.isel(time=0), E.isel(time=0)
+    dL = (((L - L0) ** 2).sum("axis") ** 0.5).max("time") / (L0 ** 2).sum("axis") ** 0.5
+    dE = abs(E - E0).max("time") / E0
+    nominal = 0 if bool(ok[0]) else int(np.argmax(ok.values))
+    spread = en.attitude_spread(eph, nominal).isel(time=-1).where(ok)
+    dL, dE, spread_q = _compute(dL.where(ok).max(), dE.where(ok).max(),
+                                spread.quantile([0.5, 0.9, 0.99], skipna=True))
+    status = np.asarray(ds["status"].values)
+    return {
+        "size": int(status.size),
+        "valid": int(np.sum(status == en.STATUS_OK)),
+        "invalid": {str(i): why for i, why in ens.invalid.items()},
+        "failed": [int(i) for i in np.nonzero(status == en.STATUS_FAILED)[0]],
+        "regime_fractions": fractions,
+        "period_quantiles": quantiles,
+        "spread_at_end_deg": {f"{q:g}": float(np.degrees(v)) for q, v in zip(
+            spread_q["quantile"].values, spread_q.values)},
+        "conservation": {"angular_momentum_rel_drift": float(np.nan_to_num(dL)),
+                         "energy_rel_drift": float(np.nan_to_num(dE))},
+    }
+
+
+def _compute(*objects):
+    """Evaluate xarray objects in one pass (one dask graph when they are lazy)."""
+    try:
+        import dask
+    except ImportError:
+        return objects
+    return dask.compute(*objects)
 
 
 #: Reductions of a time series for ``[expect.variables]``.
@@ -725,6 +929,21 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
             parsed.extend(_parse_nutation_range(r, spec, where))
         elif key == "variables":
             parsed.extend(_parse_variables(r, spec, where))
+        elif key == "regime_fractions":
+            if not isinstance(spec, dict) or not spec:
+                raise r.fail(where, "expected a table such as { SAM = { value = 0.95, "
+                                    "abs_tol = 0.05 } }")
+            r.check_keys(spec, REGIMES, where)
+            for regime, frac in spec.items():
+                w = f"{where}.{regime}"
+                if not isinstance(frac, dict):
+                    raise r.fail(w, "expected { value = ..., abs_tol = ... }")
+                r.check_keys(frac, ("value", "rel_tol", "abs_tol"), w)
+                value = r.quantity(frac.get("value"), "", f"{w}.value")
+                if not 0 <= value <= 1:
+                    raise r.fail(f"{w}.value", f"a fraction is between 0 and 1, got {value}")
+                parsed.append({"key": f"regime_fractions.{regime}", "expected": value,
+                               "tolerance": _tolerance(r, frac, w, value)})
         else:
             allowed = EXPECT_KEYS
             near = difflib.get_close_matches(key, allowed, n=1)
@@ -734,7 +953,8 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
 
 
 #: Keys of the ``[expect]`` table.
-EXPECT_KEYS = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS + ("nutation_range", "variables")
+EXPECT_KEYS = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS + (
+    "nutation_range", "variables", "regime_fractions")
 
 
 def needs_dataset(scenario: Scenario) -> str | None:
@@ -782,7 +1002,8 @@ def _variable_value(dataset, spec: dict) -> float | None:
 
 
 def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
-                       conservation: dict, *, diagnosis=None, dataset=None) -> list[dict]:
+                       conservation: dict, *, diagnosis=None, dataset=None,
+                       fractions: dict | None = None) -> list[dict]:
     """Compare the parsed ``[expect]`` entries with what the run gave.
 
     ``diagnosis`` (:func:`attitude.diagnose` of the initial state) gives the nutation range
@@ -809,6 +1030,8 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
             got = None if got is None else float((got * u.rad).to_value(spec["unit"]))
         elif key.startswith("variables."):
             got = _variable_value(dataset, spec)
+        elif key.startswith("regime_fractions."):
+            got = None if fractions is None else fractions.get(key.split(".", 1)[1], 0.0)
         else:
             out["got"] = conservation[key]
             out["ok"] = bool(out["got"] <= spec["expected"])

@@ -24,11 +24,11 @@ def test_schema_keys_match_the_loader():
     schema = _schema()
     props = schema["properties"]
     assert set(props) == set(SCHEMA)
-    for table in ("scenario", "body", "state", "propagation", "output"):
+    for table in ("scenario", "body", "state", "propagation", "output", "ensemble"):
         assert set(props[table]["properties"]) == set(SCHEMA[table]), table
     expect = props["expect"]["properties"]
     assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS, "nutation_range",
-                           "variables"} == set(EXPECT_KEYS)
+                           "variables", "regime_fractions"} == set(EXPECT_KEYS)
     assert expect["regime"]["enum"] == list(REGIMES)
 
 
