@@ -37,6 +37,12 @@ over time for runs with torques) are written as PNG next to it, e.g.
 scenarios/apophis_polhode.png (needs matplotlib: pip install 'attitude[plot]'):
 
   attitude run scenarios/apophis.toml --plot
+
+A scenario with an [ensemble] table propagates a population (a Monte Carlo cloud of
+states, or a table of bodies); --workers N runs it on a dask LocalCluster of N worker
+processes (pip install 'attitude[dask]'), writing the ephemeris chunk by chunk:
+
+  attitude run scenarios/apophis_ensemble.toml --workers 2
 """
 
 _MAIN_HELP = """\
@@ -112,6 +118,8 @@ def _summary_rows(result) -> list[tuple[str, str]]:
                 f"{_format_seconds(sc.step)}, method {method}"),
     ]
     periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in result.periods.items())
+    if result.ensemble is not None:
+        return rows[:1] + _ensemble_rows(result, rows[3][1])
     if sc.torques:
         rows.append(("Motion", f"initial state (torque-free): {d.regime}"))
         c = result.classification
@@ -138,6 +146,31 @@ def _summary_rows(result) -> list[tuple[str, str]]:
                  f"max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}; "
                  f"E0 = {d.kinetic_energy:.10g} J, max |E - E0|/E0 = "
                  f"{c['energy_rel_drift']:.2g}"))
+    return rows
+
+
+def _ensemble_rows(result, run: str) -> list[tuple[str, str]]:
+    """Summary rows of an ensemble run (population, regimes, period quantiles, spread)."""
+    e, sc = result.ensemble, result.scenario
+    bad = len(e["invalid"]) + len(e["failed"])
+    rows = [("Ensemble", f"{e['size']} bodies, {e['valid']} propagated"
+             + (f", {len(e['invalid'])} invalid input, {len(e['failed'])} failed"
+                if bad else "") + f"; epoch {sc.state.epoch.isot} "
+             f"{sc.state.epoch.scale.upper()}, frame {sc.state.frame}"),
+            ("Run", run),
+            ("Regimes", ", ".join(f"{k} {100 * v:.1f} %" for k, v in
+                                  e["regime_fractions"].items()) or "none")]
+    for key, q in e["period_quantiles"].items():
+        rows.append(("Period", f"{key}: median {_format_seconds(q['0.5'])} (5-95 %: "
+                               f"{_format_seconds(q['0.05'])} .. {_format_seconds(q['0.95'])})"))
+    spread = e["spread_at_end_deg"]
+    rows.append(("Spread", "angle from the nominal attitude at the end: "
+                 + ", ".join(f"{100 * float(q):g} % within {v:.3g} deg"
+                             for q, v in spread.items())))
+    c = result.conservation
+    rows.append(("Conserved" if not sc.torques else "Changed",
+                 f"worst body: max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}, "
+                 f"max |E - E0|/E0 = {c['energy_rel_drift']:.2g}"))
     return rows
 
 
@@ -206,8 +239,21 @@ def _cmd_run(args) -> int:
                   "with pip install 'attitude[plot]'", file=sys.stderr)
             return EXIT_INPUT
     scenario = load_scenario(args.scenario)
-    result = run_scenario(scenario, netcdf=args.output,
-                          progress=not args.quiet and sys.stderr.isatty())
+    if args.workers is not None:
+        if args.workers < 1:
+            print("attitude: error: --workers: must be at least 1", file=sys.stderr)
+            return EXIT_INPUT
+        if scenario.ensemble is None:
+            print(f"attitude: error: {args.scenario}: --workers: the scenario has no "
+                  "[ensemble] table (a single body runs in one process)", file=sys.stderr)
+            return EXIT_INPUT
+        from .ensemble import local_cluster
+
+        with local_cluster(args.workers) as client:
+            result = run_scenario(scenario, netcdf=args.output, client=client)
+    else:
+        result = run_scenario(scenario, netcdf=args.output,
+                              progress=not args.quiet and sys.stderr.isatty())
     if args.plot:
         from .plot import save_figures
 
@@ -439,6 +485,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="print nothing on success")
     run.add_argument("--plot", action="store_true",
                      help="write the figures as PNG next to the output (needs matplotlib)")
+    run.add_argument("--workers", type=int, default=None, metavar="N",
+                     help="[ensemble] scenarios: run on a dask LocalCluster of N worker "
+                          "processes (needs pip install 'attitude[dask]')")
     run.set_defaults(func=_cmd_run)
 
     chk = sub.add_parser("check", help="run scenarios and compare with their [expect] tables",

@@ -35,7 +35,8 @@ import numpy as np
 from .errors import AttitudeError
 
 __all__ = ["PlotUnavailableError", "polhode", "herpolhode", "body_axes", "euler_angles",
-           "regime_timeline", "figures", "save_figures", "FIGURES"]
+           "regime_timeline", "ensemble_spread", "figures", "save_figures", "FIGURES",
+           "ENSEMBLE_FIGURES"]
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")      # A (long), B, C (short)
 _REGIME_COLOURS = {"PA-short": "tab:blue", "PA-long": "tab:red", "SAM": "tab:cyan",
@@ -285,6 +286,36 @@ def regime_timeline(eph, classification=None):
     return fig
 
 
+def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
+    """An ensemble's attitude uncertainty: quantiles over the bodies of the angle from
+    the nominal attitude (:func:`attitude.ensemble.spread_quantiles`) against time, and
+    the distribution of that angle at the last epoch."""
+    from .ensemble import attitude_spread
+
+    spread = attitude_spread(eph, nominal)
+    if hasattr(spread.data, "dask"):
+        spread = spread.compute()
+    angle = np.degrees(np.asarray(spread.values, dtype=float))            # (body, time)
+    t, unit = _time_axis(eph.time)
+    fig = _pyplot_free_figure(figsize=(10, 4.5), layout="constrained")
+    left, right = fig.subplots(1, 2, width_ratios=(2.2, 1))
+    for q, colour in zip(quantiles, ("tab:blue", "tab:orange", "tab:red", "tab:purple")):
+        left.plot(t, np.nanquantile(angle, q, axis=0), color=colour, linewidth=1.2,
+                  label=f"{100 * q:g} % of bodies within")
+    left.set_xlabel(f"time ({unit})")
+    left.set_ylabel("angle from the nominal attitude (deg)")
+    left.set_ylim(0, 180)
+    left.grid(True, alpha=0.3)
+    left.legend(loc="upper left", fontsize="small")
+    final = angle[:, -1]
+    right.hist(final[np.isfinite(final)], bins=36, range=(0, 180), color="tab:gray")
+    right.set_xlabel("angle at the last epoch (deg)")
+    right.set_ylabel("bodies")
+    n = int(np.isfinite(final).sum())
+    fig.suptitle(_title(eph, f"Attitude spread of {n} bodies"))
+    return fig
+
+
 def _title(eph, what: str) -> str:
     name = eph.dataset.attrs.get("title") or ""
     return f"{what} - {name}" if name else what
@@ -293,12 +324,17 @@ def _title(eph, what: str) -> str:
 #: Figure name -> function, in the order :func:`figures` builds them.
 FIGURES = {"polhode": polhode, "herpolhode": herpolhode, "body_axes": body_axes,
            "euler_angles": euler_angles, "regime": regime_timeline}
+#: The figures of an ensemble (batch) ephemeris.
+ENSEMBLE_FIGURES = {"spread": ensemble_spread}
 
 
 def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
     """Every figure of :data:`FIGURES` for ``eph``: ``{name: Figure}``.  The regime
     timeline is included when ``regime`` is true, or by default when a
-    ``classification`` is given (perturbed runs)."""
+    ``classification`` is given (perturbed runs).  A batch (ensemble) ephemeris gets
+    :data:`ENSEMBLE_FIGURES` instead."""
+    if eph.is_batch:
+        return {name: func(eph) for name, func in ENSEMBLE_FIGURES.items()}
     include_regime = classification is not None if regime is None else regime
     out = {}
     for name, func in FIGURES.items():
