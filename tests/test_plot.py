@@ -76,3 +76,18 @@ def test_run_plot_without_matplotlib_exits_2(tmp_path):
     assert proc.returncode == 2
     assert "matplotlib" in proc.stderr and str(path) in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_ensemble_spread_figure(tmp_path):
+    import astropy.units as u
+
+    ens = att.Ensemble.sample(
+        80, rng=4, epoch=att_time(), mean={
+            "angular_momentum_ra": 250 * u.deg, "angular_momentum_dec": -75 * u.deg,
+            "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+            "precession_period": 27.38 * u.h},
+        sigma={"precession_period": 0.05 * u.h, "energy_ratio": 0.003})
+    eph = att.propagate(ens, np.linspace(0, 20 * 86400.0, 81))
+    paths = plot.save_figures(eph, tmp_path / "cloud")
+    assert [p.name for p in paths] == [f"cloud_{n}.png" for n in plot.ENSEMBLE_FIGURES]
+    _non_trivial(paths[0])
