@@ -124,6 +124,9 @@ class Ensemble:
         and propagated as NaN (one :class:`InvalidBodiesWarning`); ``"raise"``: the
         first one raises :class:`~attitude.InvalidInertiaError` or
         :class:`~attitude.InvalidStateError` naming its index.
+    invalid : dict, optional
+        Rows already known to be invalid, ``{index: reason}`` (a sampling model's
+        verdict); merged with the checks, the given reason first.
 
     Examples
     --------
@@ -145,7 +148,7 @@ class Ensemble:
     def __init__(self, inertia, quaternion, omega_body, *, epoch, frame: str = "ICRF",
                  names: Sequence[str] | None = None,
                  parameters: Mapping[str, np.ndarray] | None = None,
-                 on_invalid: str = "report"):
+                 on_invalid: str = "report", invalid: Mapping[int, str] | None = None):
         if on_invalid not in ("report", "raise"):
             raise InvalidStateError(f"on_invalid: expected 'report' or 'raise', got "
                                     f"{on_invalid!r}")
@@ -166,7 +169,9 @@ class Ensemble:
         names = [""] * n if names is None else [str(x) for x in names]
         if len(names) != n:
             raise InvalidStateError(f"names: expected {n} names, got {len(names)}")
-        invalid, moments, b2p = _check_rows(inertia, quaternion, omega)
+        checked, moments, b2p = _check_rows(inertia, quaternion, omega)
+        invalid = {int(i): str(why) for i, why in (invalid or {}).items()}
+        invalid = dict(sorted({**checked, **invalid}.items()))
         if invalid and on_invalid == "raise":
             i, why = next(iter(invalid.items()))
             error = (InvalidInertiaError if why.startswith(("inertia", "principal moments"))
@@ -177,7 +182,7 @@ class Ensemble:
             more = f" (and {len(invalid) - 5} more)" if len(invalid) > 5 else ""
             warnings.warn(f"{len(invalid)} of {n} bodies are not physical and will be "
                           f"propagated as NaN (status 1): {shown}{more}; see "
-                          "Ensemble.invalid", InvalidBodiesWarning, stacklevel=3)
+                          "Ensemble.invalid", InvalidBodiesWarning, stacklevel=2)
         params = {k: np.asarray(v, dtype=float) for k, v in (parameters or {}).items()}
         for slot, value in (("inertia", inertia), ("quaternion", quaternion),
                             ("omega_body", omega), ("epoch", as_epoch(epoch)),
@@ -411,23 +416,9 @@ class Ensemble:
         moments, q, w, bad = build(**{k: values[k] for k in spec})
         inertia = np.zeros((n, 3, 3))
         inertia[:, [0, 1, 2], [0, 1, 2]] = np.where(np.isfinite(moments), moments, 1.0)
-        w = np.where(np.isfinite(w), w, np.nan)
         names = ["nominal" if i < k0 else f"sample {i}" for i in range(n)]
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", InvalidBodiesWarning)
-            ens = cls(inertia, q, w, epoch=epoch, frame=frame, names=names,
-                      parameters=values)
-        invalid = dict(ens.invalid)
-        for i, why in bad.items():
-            invalid[i] = why                       # the model's reason is the clearer one
-        if invalid:
-            object.__setattr__(ens, "invalid", dict(sorted(invalid.items())))
-            shown = "; ".join(f"body {i}: {why}" for i, why in list(ens.invalid.items())[:5])
-            warnings.warn(f"{len(invalid)} of {n} sampled bodies are not physical and will "
-                          f"be propagated as NaN (status 1): {shown}", InvalidBodiesWarning,
-                          stacklevel=2)
-        del caught
-        return ens
+        return cls(inertia, q, w, epoch=epoch, frame=frame, names=names,
+                   parameters=values, invalid=bad)
 
     # --- views --------------------------------------------------------------------
     def __len__(self) -> int:

@@ -321,7 +321,7 @@ def test_sampling_errors_and_invalid_draws():
     with pytest.raises(att.InvalidStateError, match="energy_ratio.*cannot be converted"):
         att.Ensemble.sample(5, epoch=EPOCH, mean=dict(APOPHIS, energy_ratio="3 s"))
     # draws across B/C = 1 or E/E0 < 1 are reported, not resampled silently
-    with pytest.warns(en.InvalidBodiesWarning, match="sampled bodies are not physical"):
+    with pytest.warns(en.InvalidBodiesWarning, match="bodies are not physical"):
         ens = att.Ensemble.sample(400, rng=2, epoch=EPOCH, mean=APOPHIS,
                                   sigma={"ratio_b": 0.03, "energy_ratio": 0.02})
     assert ens.invalid and all(("moment ratios" in r) or ("energy ratio" in r)
