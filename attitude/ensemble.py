@@ -1028,7 +1028,7 @@ def local_cluster(n_workers: int = 2, *, threads_per_worker: int = 1, **kwargs):
     except ImportError:
         raise AttitudeError("dask scale-out needs the optional 'distributed' package: "
                             "pip install 'attitude[dask]'") from None
-    kwargs.setdefault("dashboard_address", None)
+    kwargs.setdefault("dashboard_address", ":0")     # any free port: no clash, no warning
     kwargs.setdefault("processes", True)
     with LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker,
                       **kwargs) as cluster, Client(cluster) as client:
