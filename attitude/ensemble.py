@@ -831,8 +831,8 @@ def spread_quantiles(eph, q=(0.5, 0.9, 0.99), nominal=0) -> xr.DataArray:
     """Quantiles over the bodies of :func:`attitude_spread` against time: ``(quantile,
     time)`` in rad (NaN bodies are skipped)."""
     spread = attitude_spread(eph, nominal)
-    if hasattr(spread.data, "dask"):
-        spread = spread.chunk({"body": -1})
+    if hasattr(spread.data, "dask"):   # all bodies of an epoch in one chunk, epochs split
+        spread = spread.chunk({"body": -1, "time": "auto"})
     out = spread.quantile(np.atleast_1d(q), dim="body", skipna=True)
     out.attrs = {"units": "rad", "long_name": "quantiles of the angle from the nominal"}
     return out
@@ -1030,6 +1030,40 @@ def local_cluster(n_workers: int = 2, *, threads_per_worker: int = 1, **kwargs):
                             "pip install 'attitude[dask]'") from None
     kwargs.setdefault("dashboard_address", ":0")     # any free port: no clash, no warning
     kwargs.setdefault("processes", True)
-    with LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker,
-                      **kwargs) as cluster, Client(cluster) as client:
+    with _glibc_mmap_threshold(), LocalCluster(
+            n_workers=n_workers, threads_per_worker=threads_per_worker,
+            **kwargs) as cluster, Client(cluster) as client:
         yield client
+
+
+#: dask's default ``MALLOC_TRIM_THRESHOLD_`` for its worker processes.
+_DASK_TRIM = "65536"
+
+
+@contextlib.contextmanager
+def _glibc_mmap_threshold():
+    """Start workers without dask's default ``MALLOC_TRIM_THRESHOLD_=65536``.
+
+    Setting it turns off glibc's dynamic mmap threshold, so every large numpy temporary
+    of the propagation kernel (8-32 MB per 1000-body chunk) is mmapped and page-faulted
+    afresh: measured, more than half of a worker's CPU time in the kernel and half the
+    throughput of one plain process (``benchmarks/ensemble.py``).  A value the user set
+    (other than dask's default) is kept."""
+    import os
+
+    import dask
+
+    key = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
+    if str(dask.config.get(key, None)) != _DASK_TRIM:
+        yield
+        return
+    # a previous dask cluster in this process leaves the variable in os.environ
+    inherited = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    if inherited == _DASK_TRIM:
+        del os.environ["MALLOC_TRIM_THRESHOLD_"]
+    try:
+        with dask.config.set({key: None}):
+            yield
+    finally:
+        if inherited == _DASK_TRIM:
+            os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
