@@ -731,14 +731,19 @@ def diagnose_ensemble(ensemble: Ensemble) -> xr.Dataset:
     and ``valid``."""
     from .torquefree import diagnose_many
 
-    d = diagnose_many(ensemble.principal_moments, ensemble.omega_principal())
     ok = ensemble.valid
+    n = len(ensemble)
     units = {"polhode": "s", "precession": "s", "rotation": "s", "spin": "s",
              "energy_ratio": "1", "separatrix_distance": "1", "nutation_min": "rad",
              "nutation_max": "rad"}
-    data = {k: ("body", np.where(ok, v, np.nan), {"units": units[k]}) for k, v in d.items()
-            if k != "regime"}
-    data["regime"] = ("body", np.where(ok, d["regime"], "invalid"))
+    data = {k: ("body", np.full(n, np.nan), {"units": v}) for k, v in units.items()}
+    regime = np.full(n, "invalid", dtype=object)
+    if ok.any():
+        d = diagnose_many(ensemble.principal_moments[ok], ensemble.omega_principal()[ok])
+        for k in units:
+            data[k][1][ok] = d[k]
+        regime[ok] = d["regime"]
+    data["regime"] = ("body", regime.astype(str))
     data["valid"] = ("body", ok)
     return xr.Dataset(data, coords={"body": np.arange(len(ensemble))})
 

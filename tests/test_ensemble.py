@@ -330,6 +330,12 @@ def test_sampling_errors_and_invalid_draws():
     assert set(bad_b) <= set(ens.invalid)
     eph = att.propagate(ens, [0.0, 60.0])
     assert (eph.dataset.status.values[list(ens.invalid)] == en.STATUS_INVALID).all()
+    # statistics skip the invalid bodies (their rates are NaN)
+    d = en.diagnose_ensemble(ens)
+    assert (d.regime.values[list(ens.invalid)] == "invalid").all()
+    assert sum(en.regime_fractions(ens).values()) == pytest.approx(1.0)
+    assert int(en.period_quantiles(ens).sel(period="precession").bodies) == \
+        len(ens) - len(ens.invalid)
 
 
 # --- statistics ----------------------------------------------------------------------
