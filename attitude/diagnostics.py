@@ -147,7 +147,10 @@ def principal_series(eph: Ephemeris, body_index: int | None = None) -> Principal
     if eph.is_batch:
         if body_index is None:
             raise DiagnosticsError("a batch ephemeris holds several bodies: give body_index")
-        body = eph.bodies[body_index]
+        body = eph.body_at(body_index)
+        if body is None:
+            raise DiagnosticsError(f"body {body_index} has no motion: its input was invalid "
+                                   "(status 1 in the ephemeris)")
         q = np.asarray(ds["quaternion"].values[body_index], dtype=float)
         w = np.asarray(ds["angular_velocity"].values[body_index], dtype=float)
     else:

@@ -57,6 +57,7 @@ __all__ = [
     "tumbling_state",
     "spin_state",
     "diagnose_ensemble",
+    "classify_ensemble",
     "regime_fractions",
     "period_quantiles",
     "attitude_spread",
@@ -752,18 +753,19 @@ def regime_fractions(source) -> dict[str, float]:
     """Fraction of the valid bodies in each regime, largest first.
 
     ``source``: an :class:`Ensemble` (analytic torque-free regimes), the Dataset of
-    :func:`diagnose_ensemble`, or a batch :class:`~attitude.Ephemeris` (each body
-    classified from its propagated motion with :func:`attitude.classify`, which also
-    detects regime changes under torques)."""
+    :func:`diagnose_ensemble` or :func:`classify_ensemble`, or a batch
+    :class:`~attitude.Ephemeris` (each body classified from its propagated motion by
+    :func:`classify_ensemble`, which also sees regime changes under torques).  Bodies
+    that are invalid or could not be classified are left out."""
     from .ephemeris import Ephemeris
 
     if isinstance(source, Ensemble):
         source = diagnose_ensemble(source)
     if isinstance(source, Ephemeris):
-        regimes = _classified_regimes(source)
-    else:
-        regimes = np.asarray(source["regime"].values)
-        regimes = regimes[regimes != "invalid"]
+        source = classify_ensemble(source) if source.is_batch else xr.Dataset(
+            {"regime": ("body", [_classify_one(source)])})
+    regimes = np.asarray(source["regime"].values)
+    regimes = regimes[(regimes != "invalid") & (regimes != "unclassified")]
     if regimes.size == 0:
         return {}
     names, counts = np.unique(regimes, return_counts=True)
@@ -771,24 +773,52 @@ def regime_fractions(source) -> dict[str, float]:
     return {str(names[i]): float(counts[i] / regimes.size) for i in order}
 
 
-def _classified_regimes(eph) -> np.ndarray:
+def classify_ensemble(eph, **options) -> xr.Dataset:
+    """:func:`attitude.classify` of every body of a batch ephemeris, one by one: a
+    Dataset along ``body`` with ``regime`` (``"invalid"`` for bodies whose ``status`` is
+    not 0, ``"unclassified"`` when the classification failed, e.g. a run shorter than a
+    cycle), ``confidence``, ``margin`` and ``reason`` (why a body is not classified).
+    One body that cannot be classified does not stop the others.  ``options`` go to
+    :func:`attitude.classify` (default ``require_periods=False``); a dask-backed
+    ephemeris is loaded first."""
     from .classify import classify
     from .ephemeris import Ephemeris
 
-    ds = eph.dataset
     if not eph.is_batch:
-        return np.array([classify(eph).regime])
-    status = ds["status"].values if "status" in ds else np.zeros(ds.sizes["body"])
-    out = []
-    for i in range(ds.sizes["body"]):
+        raise InvalidStateError("classify_ensemble takes a batch ephemeris (dims body, "
+                                "time); use attitude.classify for one body")
+    ds = eph.dataset
+    if any(hasattr(v.data, "dask") for v in ds.data_vars.values()):
+        eph = Ephemeris(ds.load())
+        ds = eph.dataset
+    options.setdefault("require_periods", False)
+    n = ds.sizes["body"]
+    status = ds["status"].values if "status" in ds else np.zeros(n, dtype=np.int8)
+    regime = np.full(n, "invalid", dtype=object)
+    confidence, margin = np.full(n, np.nan), np.full(n, np.nan)
+    reason = np.full(n, "", dtype=object)
+    for i in range(n):
         if status[i] != STATUS_OK:
+            reason[i] = "invalid input" if status[i] == STATUS_INVALID else \
+                "propagation failed"
             continue
-        one = ds.isel(body=i).drop_vars(["body", "body_name"], errors="ignore")
-        one.attrs["inertia"] = one["inertia"].values.ravel()
-        one.attrs["principal_moments"] = one["principal_moments"].values
-        one = one.drop_vars(["inertia", "principal_moments", "status"], errors="ignore")
-        out.append(classify(Ephemeris(one.load())).regime)
-    return np.array(out)
+        try:
+            c = classify(eph, body_index=i, **options)
+        except AttitudeError as exc:
+            regime[i], reason[i] = "unclassified", str(exc)
+            continue
+        regime[i], confidence[i], margin[i] = c.regime, c.confidence, c.margin
+    return xr.Dataset({"regime": ("body", regime.astype(str)),
+                       "confidence": ("body", confidence),
+                       "margin": ("body", margin),
+                       "reason": ("body", reason.astype(str))},
+                      coords={"body": np.arange(n)})
+
+
+def _classify_one(eph) -> str:
+    from .classify import classify
+
+    return classify(eph, require_periods=False).regime
 
 
 def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:

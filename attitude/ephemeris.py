@@ -196,14 +196,24 @@ class Ephemeris:
                          mass=ds.attrs.get("mass"), name=str(ds.attrs.get("body_name", "")))
 
     @property
-    def bodies(self) -> list[RigidBody]:
-        """The bodies of the ephemeris (one for a single-body ephemeris)."""
+    def bodies(self) -> list[RigidBody | None]:
+        """The bodies of the ephemeris (one for a single-body ephemeris); ``None`` for
+        the bodies of an ensemble whose ``status`` is not 0 (invalid input)."""
         if not self.is_batch:
             return [self.body]
+        return [self.body_at(i) for i in range(self._dataset.sizes["body"])]
+
+    def body_at(self, index: int) -> RigidBody | None:
+        """Body ``index`` of a batch, rebuilt from its ``inertia`` row (``None`` when its
+        ``status`` says its input was invalid)."""
         ds = self._dataset
-        names = ds["body_name"].values if "body_name" in ds.coords else [""] * ds.sizes["body"]
-        return [RigidBody(np.asarray(i, dtype=float).reshape(3, 3), name=str(n))
-                for i, n in zip(ds["inertia"].values, names)]
+        if not self.is_batch:
+            raise EphemerisFormatError("body_at: a single-body ephemeris; use .body")
+        if "status" in ds and int(ds["status"].values[index]) != 0:
+            return None
+        name = str(ds["body_name"].values[index]) if "body_name" in ds.coords else ""
+        return RigidBody(np.asarray(ds["inertia"].values[index], dtype=float).reshape(3, 3),
+                         name=name)
 
     def conservation(self) -> dict[str, float]:
         """Largest relative drift of the inertial angular-momentum vector and of the

@@ -188,3 +188,32 @@ def test_run_with_workers_on_a_local_cluster(tmp_path):
         single["ensemble"]["spread_at_end_deg"], abs=1e-6)
     ds = att.Ephemeris.from_netcdf(tmp_path / "cloud.nc").dataset
     assert ds.sizes["body"] == 60 and (ds.status.values == 0).all()
+
+
+def test_classify_command_on_an_ensemble_file(tmp_path):
+    path = write(tmp_path, SAMPLED.replace('duration = "5 d"', 'duration = "20 d"')
+                 .replace("[ensemble.sigma]", "[ensemble.sigma]\nratio_b = 0.01"))
+    sc = load_scenario(path)
+    res = run_scenario(sc)
+    out = subprocess.run([sys.executable, "-m", "attitude", "classify",
+                          str(tmp_path / "cloud.nc"), "--json"], capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    # classified from the propagated motion = the analytic labels of the initial states
+    analytic = en.diagnose_ensemble(sc.ensemble).regime.values
+    got = [b["regime"] for b in doc["bodies"]]
+    assert got == analytic.tolist()
+    assert "LAM" in got and "SAM" in got
+    assert doc["regime_fractions"] == pytest.approx(res.ensemble["regime_fractions"])
+
+
+def test_classify_ensemble_reports_invalid_and_unclassified_bodies():
+    with pytest.warns(en.InvalidBodiesWarning):
+        ens = att.Ensemble.from_arrays(
+            principal_moments=[[1.0, 2.0, 2.5], [1.0, 1.0, 3.0]],
+            omega_body=[[0.1, 0.0, 0.2], [0.1, 0.0, 0.2]], epoch="2030-01-01")
+    table = en.classify_ensemble(att.propagate(ens, np.linspace(0.0, 2000.0, 400)))
+    assert table.regime.values.tolist() == ["SAM", "invalid"]
+    short = en.classify_ensemble(att.propagate(ens, [0.0]))
+    assert short.regime.values[0] == "unclassified" and "sample" in short.reason.values[0]
