@@ -1015,7 +1015,9 @@ def _dask_arrays(bounds, args, T, client):
         raise AttitudeError("client=/chunks= need the optional 'dask' package: pip install "
                             "'attitude[dask]'") from None
 
-    if isinstance(client, str):
+    if client is True or client == "local":
+        client = _shared_local_client()
+    elif isinstance(client, str):
         client = _client_for(client)
     shapes = {"q": (T, 4), "w": (T, 3), "L": (T, 3), "E": (T,), "status": ()}
     dtypes = {"status": np.int8}
@@ -1026,6 +1028,23 @@ def _dask_arrays(bounds, args, T, client):
             pieces[k].append(da.from_delayed(part[k], shape=(b - a,) + shape,
                                              dtype=dtypes.get(k, np.float64)))
     return {k: da.concatenate(v, axis=0) for k, v in pieces.items()}
+
+
+_SHARED: dict = {}
+
+
+def _shared_local_client():
+    """``client="local"``: one LocalCluster for this process (a worker per available
+    core), started on first use and closed at exit; it is the default dask client, so
+    the lazy ephemerides are computed there."""
+    if "client" not in _SHARED:
+        import atexit
+        import os
+
+        cm = local_cluster(max(1, len(os.sched_getaffinity(0))))
+        _SHARED["client"] = cm.__enter__()
+        atexit.register(cm.__exit__, None, None, None)
+    return _SHARED["client"]
 
 
 def _client_for(address: str):

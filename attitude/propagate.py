@@ -132,10 +132,12 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
 
     client : dask.distributed.Client or str, optional
         Scale out on dask: the ``body`` dimension is split into chunks that run the
-        same numpy kernel as tasks on the cluster (a ``Client``, or a scheduler address
-        such as ``"tcp://host:8786"``; :func:`attitude.ensemble.local_cluster` starts
-        a ``LocalCluster``).  The ephemeris is then backed by dask arrays and computed
-        when written or loaded, chunk by chunk.
+        same numpy kernel as tasks on the cluster: a ``Client``, a scheduler address
+        such as ``"tcp://host:8786"`` for a real cluster, or ``"local"`` for a
+        ``LocalCluster`` of this machine's cores kept for the session
+        (:func:`attitude.ensemble.local_cluster` gives one with a ``with`` block).
+        The ephemeris is then backed by dask arrays and computed when written or
+        loaded, chunk by chunk.
     chunks : int, optional
         Bodies per chunk; alone (no ``client``) it gives a dask-backed ephemeris run by
         dask's current scheduler.  Default with ``client``: about a million epochs per

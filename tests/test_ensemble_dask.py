@@ -100,3 +100,29 @@ def test_a_worker_that_dies_mid_run_is_retried(client, tmp_path):
     ref = att.propagate(ens, t, torques=[lambda t, q, w, body: np.zeros_like(w)], step=5.0)
     np.testing.assert_allclose(q, ref.dataset.quaternion.values, atol=1e-13)
     assert (eph.dataset.status.values == 0).all()
+
+
+def test_client_local_starts_a_shared_local_cluster(tmp_path):
+    import subprocess
+    import sys
+
+    script = tmp_path / "local.py"
+    script.write_text(
+        "import numpy as np, attitude as att, distributed\n"
+        "if __name__ == '__main__':\n"
+        "    ens = att.Ensemble.from_arrays(principal_moments=[[1, 2, 2.5]] * 30,\n"
+        "        omega_body=np.random.default_rng(0).normal(size=(30, 3)), epoch='2030-01-01')\n"
+        "    t = np.linspace(0, 10, 5)\n"
+        "    e = att.propagate(ens, t, client='local', chunks=10)\n"
+        "    f = att.propagate(ens, t, client='local', chunks=10)\n"
+        "    ref = att.propagate(ens, t)\n"
+        "    c = distributed.default_client()\n"
+        "    print(len(c.scheduler_info()['workers']))\n"
+        "    print(float(abs(e.dataset.quaternion - ref.dataset.quaternion).max()))\n"
+        "    print(float(abs(f.dataset.quaternion - ref.dataset.quaternion).max()))\n")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=180)
+    assert out.returncode == 0, out.stderr
+    workers, d1, d2 = out.stdout.split()
+    assert int(workers) == len(os.sched_getaffinity(0))
+    assert float(d1) < 1e-13 and float(d2) < 1e-13
