@@ -231,23 +231,7 @@ class Ensemble:
                     states: Sequence[AttitudeState]) -> Ensemble:
         """An ensemble from equal-length sequences of bodies and states (one epoch and
         frame)."""
-        bodies, states = list(bodies), list(states)
-        if len(bodies) != len(states) or not bodies:
-            raise InvalidStateError(f"batch: got {len(bodies)} bodies and {len(states)} "
-                                    "states; give one state per body")
-        for i, (b, s) in enumerate(zip(bodies, states)):
-            if not isinstance(b, RigidBody):
-                raise InvalidStateError(f"bodies[{i}]: expected a RigidBody, got "
-                                        f"{type(b).__name__}")
-            if not isinstance(s, AttitudeState):
-                raise InvalidStateError(f"states[{i}]: expected an AttitudeState, got "
-                                        f"{type(s).__name__}")
-            if s.frame != states[0].frame:
-                raise InvalidStateError(f"states[{i}].frame = {s.frame} differs from "
-                                        f"states[0].frame = {states[0].frame}")
-            if abs((s.epoch - states[0].epoch).to_value(u.s)) > 0:
-                raise InvalidStateError(f"states[{i}].epoch differs from states[0].epoch; "
-                                        "a batch shares one epoch")
+        bodies, states = check_batch(bodies, states)
         return cls(np.stack([b.inertia for b in bodies]),
                    np.stack([s.attitude.as_quat() for s in states]),
                    np.stack([s.omega_body for s in states]), epoch=states[0].epoch,
@@ -471,6 +455,29 @@ class Ensemble:
                 value = {keep[i]: why for i, why in value.items() if i in keep}
             object.__setattr__(out, slot, value)
         return out
+
+
+def check_batch(bodies, states) -> tuple[list[RigidBody], list[AttitudeState]]:
+    """Equal-length, non-empty sequences of bodies and states sharing one epoch and
+    frame, as lists; otherwise :class:`~attitude.InvalidStateError` naming the index."""
+    bodies, states = list(bodies), list(states)
+    if len(bodies) != len(states) or not bodies:
+        raise InvalidStateError(f"batch: got {len(bodies)} bodies and {len(states)} "
+                                "states; give one state per body")
+    for i, (b, s) in enumerate(zip(bodies, states)):
+        if not isinstance(b, RigidBody):
+            raise InvalidStateError(f"bodies[{i}]: expected a RigidBody, got "
+                                    f"{type(b).__name__}")
+        if not isinstance(s, AttitudeState):
+            raise InvalidStateError(f"states[{i}]: expected an AttitudeState, got "
+                                    f"{type(s).__name__}")
+        if s.frame != states[0].frame:
+            raise InvalidStateError(f"states[{i}].frame = {s.frame} differs from "
+                                    f"states[0].frame = {states[0].frame}")
+        if abs((s.epoch - states[0].epoch).to_value(u.s)) > 0:
+            raise InvalidStateError(f"states[{i}].epoch differs from states[0].epoch; "
+                                    "a batch shares one epoch")
+    return bodies, states
 
 
 # ============================================================================

@@ -16,6 +16,7 @@ from astropy.time import Time
 
 from . import _quat
 from .body import RigidBody
+from .ensemble import Ensemble, check_batch
 from .ephemeris import Ephemeris
 from .errors import InvalidStateError
 from .events import as_events, locate, name_of
@@ -67,22 +68,7 @@ def _as_batch(body, state) -> tuple[list[RigidBody], list[AttitudeState], bool]:
     if isinstance(body, RigidBody) or isinstance(state, AttitudeState):
         raise InvalidStateError("a batch needs a sequence of bodies and a sequence of states "
                                 "of the same length")
-    bodies, states = list(body), list(state)
-    if len(bodies) != len(states) or not bodies:
-        raise InvalidStateError(f"batch: got {len(bodies)} bodies and {len(states)} states; "
-                                "give one state per body")
-    for i, (b, s) in enumerate(zip(bodies, states)):
-        if not isinstance(b, RigidBody):
-            raise InvalidStateError(f"bodies[{i}]: expected a RigidBody, got {type(b).__name__}")
-        if not isinstance(s, AttitudeState):
-            raise InvalidStateError(
-                f"states[{i}]: expected an AttitudeState, got {type(s).__name__}")
-        if s.frame != states[0].frame:
-            raise InvalidStateError(f"states[{i}].frame = {s.frame} differs from "
-                                    f"states[0].frame = {states[0].frame}")
-        if abs((s.epoch - states[0].epoch).to_value(u.s)) > 0:
-            raise InvalidStateError(f"states[{i}].epoch differs from states[0].epoch; "
-                                    "a batch shares one epoch")
+    bodies, states = check_batch(body, state)
     return bodies, states, True
 
 
@@ -164,8 +150,6 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     >>> eph.conservation()["energy_rel_drift"] < 1e-13
     True
     """
-    from .ensemble import Ensemble
-
     if isinstance(body, Ensemble) and times is None:
         state, times = None, state
     if times is None:
