@@ -19,8 +19,9 @@ from . import (
     torques,  # noqa: F401  (att.torques.GravityGradient, ...)
 )
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
-from .classify import Classification, classify
-from .ensemble import Ensemble
+from .classify import Classification, ClassificationError, classify
+from .diagnostics import DiagnosticsError, InsufficientDataError
+from .ensemble import Ensemble, InvalidBodiesWarning
 from .ephemeris import Ephemeris
 from .errors import (
     AttitudeError,
@@ -34,9 +35,10 @@ from .errors import (
     ShapeModelError,
 )
 from .events import Event, event_table, nutation_crossing
-from .orbit import KeplerOrbit
+from .orbit import KeplerOrbit, OrbitError
 from .propagate import propagate
 from .state import INERTIAL_FRAMES, AttitudeState
+from .torques import TorqueConfigError
 
 __version__ = "0.1.0"
 
@@ -66,8 +68,14 @@ __all__ = [
     "ScenarioError",
     "PropagationError",
     "EphemerisFormatError",
+    "OrbitError",
+    "TorqueConfigError",
+    "DiagnosticsError",
+    "InsufficientDataError",
+    "ClassificationError",
     "AttitudeWarning",
     "NearSeparatrixWarning",
+    "InvalidBodiesWarning",
 ]
 
 

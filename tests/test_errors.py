@@ -1,0 +1,38 @@
+"""Every error class is reachable as ``att.<Name>``, derives from AttitudeError and from
+the builtin that describes it, and is what the package really raises."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import attitude as att
+
+ERRORS = ["InvalidInertiaError", "InvalidStateError", "ShapeModelError", "ScenarioError",
+          "EphemerisFormatError", "OrbitError", "TorqueConfigError", "DiagnosticsError",
+          "InsufficientDataError", "ClassificationError"]
+
+
+@pytest.mark.parametrize("name", ERRORS)
+def test_input_errors_are_attitude_errors_and_value_errors(name):
+    cls = getattr(att, name)
+    assert name in att.__all__
+    assert issubclass(cls, att.AttitudeError) and issubclass(cls, ValueError)
+
+
+def test_warnings_are_attitude_warnings():
+    for cls in (att.NearSeparatrixWarning, att.InvalidBodiesWarning):
+        assert issubclass(cls, att.AttitudeWarning) and issubclass(cls, UserWarning)
+
+
+def test_the_top_level_classes_are_the_ones_raised():
+    with pytest.raises(att.OrbitError, match="e"):
+        att.KeplerOrbit.from_elements(a=7e6, e=1.5, mu=3.986e14)
+    with pytest.raises(att.TorqueConfigError):
+        att.torques.from_config({"type": "no_such_torque"})
+    body = att.RigidBody.from_principal_moments([1.0, 2.0, 2.5])
+    state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.0, 0.2])
+    with pytest.raises(att.InsufficientDataError):
+        att.classify(att.propagate(body, state, np.array([0.0])))
+    with pytest.warns(att.InvalidBodiesWarning):
+        att.Ensemble.from_arrays(principal_moments=[[1.0, 1.0, 3.0]],
+                                 omega_body=[[0.0, 0.0, 1.0]], epoch="2030-01-01")
