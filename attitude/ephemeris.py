@@ -215,6 +215,47 @@ class Ephemeris:
         return RigidBody(np.asarray(ds["inertia"].values[index], dtype=float).reshape(3, 3),
                          name=name)
 
+    def with_body(self, body: RigidBody) -> Ephemeris:
+        """The same single-body motion with ``body``'s mass properties: the ``inertia``,
+        ``principal_moments`` (and ``body_name``, ``mass``) attributes set and the
+        angular momentum and energy recomputed from the quaternions and rates.  For an
+        ephemeris read from a file that carries none (a CCSDS AEM), so that
+        :func:`attitude.classify` and the diagnostics can use it.
+
+        Examples
+        --------
+        >>> import numpy as np, attitude as att
+        >>> from scipy.spatial.transform import Rotation
+        >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.0, 0.2])
+        >>> eph = att.propagate(body, state, np.linspace(0.0, 60.0, 7))
+        >>> other = att.RigidBody.from_principal_moments([2.0, 4.0, 6.0])
+        >>> float(eph.with_body(other).dataset.kinetic_energy[0] / eph.dataset.kinetic_energy[0])
+        2.0
+        """
+        if self.is_batch:
+            raise EphemerisFormatError("with_body: a batch ephemeris has one body per index")
+        if not isinstance(body, RigidBody):
+            raise EphemerisFormatError(f"with_body: expected a RigidBody, got "
+                                       f"{type(body).__name__}")
+        ds = self._dataset.copy()
+        q = np.asarray(ds["quaternion"].values, dtype=float)
+        w = np.asarray(ds["angular_velocity"].values, dtype=float)
+        L, E = momentum_and_energy(body.inertia, q, w)
+        for name, value in (("angular_momentum", L), ("kinetic_energy", E)):
+            attrs = {k: v for k, v in ds[name].attrs.items() if k != "comment"}
+            ds[name] = (ds[name].dims, value, attrs)
+        ds.attrs["inertia"] = body.inertia.ravel().copy()
+        ds.attrs["principal_moments"] = body.principal_moments.copy()
+        if "inertia_known" in ds.attrs:
+            ds.attrs["inertia_known"] = 1
+        for key, value in (("body_name", body.name), ("mass", body.mass)):
+            if value:
+                ds.attrs[key] = value
+            else:
+                ds.attrs.pop(key, None)
+        return Ephemeris(ds)
+
     def conservation(self) -> dict[str, float]:
         """Largest relative drift of the inertial angular-momentum vector and of the
         kinetic energy from their first sample: ``max |L(t) - L(0)| / |L(0)|`` and

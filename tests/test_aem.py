@@ -556,6 +556,14 @@ def test_without_a_body_inertia_is_unknown(tumbling, body, tmp_path):
     L = with_body.rotation.apply(ds.angular_velocity.values @ body.inertia.T)
     np.testing.assert_allclose(with_body.dataset.angular_momentum.values, L, rtol=1e-15)
     assert with_body.body.principal_moments.tolist() == body.principal_moments.tolist()
+    # the same afterwards: Ephemeris.with_body on what was read without one
+    later = eph.with_body(body)
+    np.testing.assert_array_equal(later.dataset.angular_momentum.values,
+                                  with_body.dataset.angular_momentum.values)
+    np.testing.assert_array_equal(later.dataset.kinetic_energy.values,
+                                  with_body.dataset.kinetic_energy.values)
+    assert later.dataset.attrs["inertia_known"] == 1
+    assert later.body.principal_moments.tolist() == body.principal_moments.tolist()
 
 
 def test_angular_velocity_estimated_from_attitudes(body, tmp_path):
