@@ -44,7 +44,17 @@ def _batch():
     return att.propagate(bodies, states, np.arange(5.0))
 
 
-@pytest.fixture(params=["single", "batch", "streamed"])
+def _ensemble():
+    """Sampled bodies, one of them invalid, written from dask chunks (status flags and
+    sampled-parameter variables)."""
+    with pytest.warns(att.ensemble.InvalidBodiesWarning):
+        ens = att.Ensemble.from_arrays(principal_moments=[[1, 2, 3], [1, 1, 3], [2, 2, 3]],
+                                       omega_body=[[0.1, 0.2, 0.3]] * 3, epoch="2030-01-01",
+                                       names=["a", "bad", "bb"])
+    return att.propagate(ens, np.arange(5.0), chunks=2)
+
+
+@pytest.fixture(params=["single", "batch", "streamed", "ensemble"])
 def ncfile(request, tmp_path):
     if request.param == "streamed":
         from attitude.streaming import UniformTimes, propagate_to_netcdf
@@ -53,7 +63,7 @@ def ncfile(request, tmp_path):
         return propagate_to_netcdf(eph.body, att.AttitudeState(
             eph.epoch, eph.rotation[0], eph.dataset.angular_velocity.values[0],
             frame=eph.frame), UniformTimes(0.0, 2.0, 51), tmp_path / "streamed.nc", block=20)
-    eph = _single() if request.param == "single" else _batch()
+    eph = {"single": _single, "batch": _batch, "ensemble": _ensemble}[request.param]()
     return eph.to_netcdf(tmp_path / f"{request.param}.nc")
 
 
@@ -64,7 +74,9 @@ def test_cf_rules_directly(ncfile):
             assert getattr(nc, name), name
         for name, var in nc.variables.items():
             assert getattr(var, "long_name", "") or getattr(var, "standard_name", ""), name
-            if var.dtype != str and var.dtype.kind != "S":
+            if "flag_values" in var.ncattrs():               # CF 3.5 flags: no units
+                assert len(var.flag_values) == len(var.flag_meanings.split()), name
+            elif var.dtype != str and var.dtype.kind != "S":
                 assert hasattr(var, "units"), f"{name} has no units"
             if name in nc.dimensions and var.dtype.kind == "S":
                 # a string-valued coordinate variable: a char array (CF 6.1)
@@ -102,7 +114,11 @@ def test_file_reads_back_with_the_in_memory_schema(ncfile):
     assert list(ds.axis.values) == ["x", "y", "z"]
     assert "quaternion_component_label" not in ds.variables
     assert ds.time.attrs["units"] == "s"
-    if eph.is_batch:
+    if eph.is_batch and "status" in ds:
+        assert list(ds.body_name.values) == ["a", "bad", "bb"]
+        assert ds.status.values.tolist() == [0, 1, 0]
+        assert np.isnan(ds.quaternion.values[1]).all()
+    elif eph.is_batch:
         assert list(ds.body_name.values) == ["a", "bb"]
 
 
