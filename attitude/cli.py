@@ -160,13 +160,21 @@ def _ensemble_rows(result, run: str) -> list[tuple[str, str]]:
             ("Run", run),
             ("Regimes", ", ".join(f"{k} {100 * v:.1f} %" for k, v in
                                   e["regime_fractions"].items()) or "none")]
+    for i, why in list(e["invalid"].items())[:5]:
+        name = sc.ensemble.names[int(i)]
+        rows.append(("Invalid", f"body {i}" + (f" ({name})" if name else "") + f": {why}"))
+    if len(e["invalid"]) > 5:
+        rows.append(("Invalid", f"... and {len(e['invalid']) - 5} more (--report lists all)"))
+    if e["failed"]:
+        rows.append(("Failed", "bodies " + ", ".join(map(str, e["failed"][:20]))))
     for key, q in e["period_quantiles"].items():
         rows.append(("Period", f"{key}: median {_format_seconds(q['0.5'])} (5-95 %: "
                                f"{_format_seconds(q['0.05'])} .. {_format_seconds(q['0.95'])})"))
     spread = e["spread_at_end_deg"]
-    rows.append(("Spread", "angle from the nominal attitude at the end: "
-                 + ", ".join(f"{100 * float(q):g} % within {v:.3g} deg"
-                             for q, v in spread.items())))
+    if spread:
+        rows.append(("Spread", "angle from the nominal attitude at the end: "
+                     + ", ".join(f"{100 * float(q):g} % within {v:.3g} deg"
+                                 for q, v in spread.items())))
     c = result.conservation
     rows.append(("Conserved" if not sc.torques else "Changed",
                  f"worst body: max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}, "

@@ -128,6 +128,9 @@ class Ensemble:
     invalid : dict, optional
         Rows already known to be invalid, ``{index: reason}`` (a sampling model's
         verdict); merged with the checks, the given reason first.
+    nominal : int, optional
+        Index of the nominal member (the mean state of a sampled ensemble), from which
+        :func:`attitude_spread` measures; None for a catalogue.
 
     Examples
     --------
@@ -144,12 +147,14 @@ class Ensemble:
     """
 
     __slots__ = ("inertia", "quaternion", "omega_body", "epoch", "frame", "names",
-                 "parameters", "invalid", "principal_moments", "body_to_principal")
+                 "parameters", "invalid", "principal_moments", "body_to_principal",
+                 "nominal")
 
     def __init__(self, inertia, quaternion, omega_body, *, epoch, frame: str = "ICRF",
                  names: Sequence[str] | None = None,
                  parameters: Mapping[str, np.ndarray] | None = None,
-                 on_invalid: str = "report", invalid: Mapping[int, str] | None = None):
+                 on_invalid: str = "report", invalid: Mapping[int, str] | None = None,
+                 nominal: int | None = None):
         if on_invalid not in ("report", "raise"):
             raise InvalidStateError(f"on_invalid: expected 'report' or 'raise', got "
                                     f"{on_invalid!r}")
@@ -189,7 +194,8 @@ class Ensemble:
                             ("omega_body", omega), ("epoch", as_epoch(epoch)),
                             ("frame", check_frame(frame)), ("names", tuple(names)),
                             ("parameters", params), ("invalid", dict(invalid)),
-                            ("principal_moments", moments), ("body_to_principal", b2p)):
+                            ("principal_moments", moments), ("body_to_principal", b2p),
+                            ("nominal", None if nominal is None else int(nominal))):
             if isinstance(value, np.ndarray):
                 value.flags.writeable = False
             object.__setattr__(self, slot, value)
@@ -403,7 +409,7 @@ class Ensemble:
         inertia[:, [0, 1, 2], [0, 1, 2]] = np.where(np.isfinite(moments), moments, 1.0)
         names = ["nominal" if i < k0 else f"sample {i}" for i in range(n)]
         return cls(inertia, q, w, epoch=epoch, frame=frame, names=names,
-                   parameters=values, invalid=bad)
+                   parameters=values, invalid=bad, nominal=0 if k0 else None)
 
     # --- views --------------------------------------------------------------------
     def __len__(self) -> int:
@@ -453,6 +459,8 @@ class Ensemble:
                 value = {k: v[idx] for k, v in value.items()}
             elif slot == "invalid":
                 value = {keep[i]: why for i, why in value.items() if i in keep}
+            elif slot == "nominal" and value is not None:
+                value = keep.get(value)
             object.__setattr__(out, slot, value)
         return out
 
@@ -994,6 +1002,8 @@ def propagate_ensemble(ensemble: Ensemble, t: np.ndarray, *, method: str = "exac
             [STATUS_OK, STATUS_INVALID, STATUS_FAILED], dtype=np.int8),
         "flag_meanings": _STATUS_MEANINGS})}
     attrs = {"ensemble_size": n}
+    if ensemble.nominal is not None:
+        attrs["nominal_body"] = ensemble.nominal
     if ensemble.invalid:
         attrs["invalid_bodies"] = "; ".join(f"{i}: {why}" for i, why in
                                             list(ensemble.invalid.items())[:100])

@@ -35,8 +35,8 @@ import numpy as np
 from .errors import AttitudeError
 
 __all__ = ["PlotUnavailableError", "polhode", "herpolhode", "body_axes", "euler_angles",
-           "regime_timeline", "ensemble_spread", "figures", "save_figures", "FIGURES",
-           "ENSEMBLE_FIGURES"]
+           "regime_timeline", "ensemble_regimes", "ensemble_spread", "figures",
+           "save_figures", "FIGURES", "ENSEMBLE_FIGURES"]
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")      # A (long), B, C (short)
 _REGIME_COLOURS = {"PA-short": "tab:blue", "PA-long": "tab:red", "SAM": "tab:cyan",
@@ -316,6 +316,42 @@ def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
     return fig
 
 
+def ensemble_regimes(eph):
+    """A population at a glance: the torque-free regime of each valid body at the first
+    epoch (bar chart of the fractions) and the distribution of the precession and
+    rotation periods (log scale)."""
+    from .torquefree import diagnose_many
+
+    ds = eph.dataset
+    ok = ds["status"].values == 0 if "status" in ds else np.ones(ds.sizes["body"], bool)
+    moments = np.asarray(ds["principal_moments"].values, dtype=float)[ok]
+    inertia = np.asarray(ds["inertia"].values, dtype=float).reshape(-1, 3, 3)[ok]
+    w = np.asarray(ds["angular_velocity"].values[:, 0], dtype=float)[ok]
+    _, axes = np.linalg.eigh(inertia)                     # principal axes as columns
+    d = diagnose_many(moments, np.einsum("nji,nj->ni", axes, w))
+    fig = _pyplot_free_figure(figsize=(10, 4.2), layout="constrained")
+    left, right = fig.subplots(1, 2, width_ratios=(1, 1.6))
+    names, counts = np.unique(d["regime"], return_counts=True)
+    left.bar(names, counts / max(counts.sum(), 1),
+             color=[_REGIME_COLOURS.get(r, "tab:brown") for r in names])
+    left.set_ylabel("fraction of the bodies")
+    left.set_title(f"regimes of {int(ok.sum())} bodies")
+    periods = [(k, d[k][np.isfinite(d[k])]) for k in ("precession", "rotation", "spin")]
+    periods = [(k, v) for k, v in periods if v.size]
+    if periods:
+        lo = min(v.min() for _, v in periods)
+        hi = max(v.max() for _, v in periods)
+        bins = np.geomspace(lo / 1.01, hi * 1.01, 30)
+        for k, v in periods:
+            right.hist(v, bins=bins, alpha=0.6, label=f"{k} ({v.size})")
+        right.set_xscale("log")
+        right.legend(loc="best", fontsize="small")
+    right.set_xlabel("period (s)")
+    right.set_ylabel("bodies")
+    fig.suptitle(_title(eph, "Population"))
+    return fig
+
+
 def _title(eph, what: str) -> str:
     name = eph.dataset.attrs.get("title") or ""
     return f"{what} - {name}" if name else what
@@ -324,8 +360,9 @@ def _title(eph, what: str) -> str:
 #: Figure name -> function, in the order :func:`figures` builds them.
 FIGURES = {"polhode": polhode, "herpolhode": herpolhode, "body_axes": body_axes,
            "euler_angles": euler_angles, "regime": regime_timeline}
-#: The figures of an ensemble (batch) ephemeris.
-ENSEMBLE_FIGURES = {"spread": ensemble_spread}
+#: The figures of an ensemble (batch) ephemeris; ``spread`` only when it has a nominal
+#: body (a sampled cloud: the ``nominal_body`` attribute).
+ENSEMBLE_FIGURES = {"regimes": ensemble_regimes, "spread": ensemble_spread}
 
 
 def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
@@ -334,7 +371,11 @@ def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
     ``classification`` is given (perturbed runs).  A batch (ensemble) ephemeris gets
     :data:`ENSEMBLE_FIGURES` instead."""
     if eph.is_batch:
-        return {name: func(eph) for name, func in ENSEMBLE_FIGURES.items()}
+        nominal = eph.dataset.attrs.get("nominal_body")
+        out = {"regimes": ensemble_regimes(eph)}
+        if nominal is not None:
+            out["spread"] = ensemble_spread(eph, nominal=int(nominal))
+        return out
     include_regime = classification is not None if regime is None else regime
     out = {}
     for name, func in FIGURES.items():

@@ -685,6 +685,7 @@ def _run_ensemble(scenario: Scenario, *, netcdf, write_outputs: bool, client) ->
                     rtol=scenario.rtol, torques=list(scenario.torques),
                     step=scenario.integrator_step, order=scenario.order, client=client,
                     chunks=chunks)
+    eph.dataset.attrs["title"] = f"attitude ensemble ephemeris: {scenario.name}"
     outputs = []
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
     if target is not None and write_outputs:
@@ -708,8 +709,9 @@ def _run_ensemble(scenario: Scenario, *, netcdf, write_outputs: bool, client) ->
 
 def ensemble_summary(scenario: Scenario, eph) -> dict:
     """Regime fractions, period quantiles (analytic for torque-free runs, else regimes
-    classified per body), the attitude spread from the nominal at the end, the worst
-    conservation over the valid bodies, and the invalid bodies: plain JSON types."""
+    classified per body), the attitude spread from the nominal at the end (sampled
+    ensembles; empty for a catalogue), the worst conservation over the valid bodies,
+    and the invalid bodies: plain JSON types."""
     from . import ensemble as en
 
     ens = scenario.ensemble
@@ -729,10 +731,13 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
     L0, E0 = L.isel(time=0), E.isel(time=0)
     dL = (((L - L0) ** 2).sum("axis") ** 0.5).max("time") / (L0 ** 2).sum("axis") ** 0.5
     dE = abs(E - E0).max("time") / E0
-    nominal = 0 if bool(ok[0]) else int(np.argmax(ok.values))
-    spread = en.attitude_spread(eph, nominal).isel(time=-1).where(ok)
-    dL, dE, spread_q = _compute(dL.where(ok).max(), dE.where(ok).max(),
-                                spread.quantile([0.5, 0.9, 0.99], skipna=True))
+    reductions = [dL.where(ok).max(), dE.where(ok).max()]
+    if ens.nominal is not None and ens.valid[ens.nominal]:   # a sampled cloud
+        spread = en.attitude_spread(eph, ens.nominal).isel(time=-1).where(ok)
+        reductions.append(spread.quantile([0.5, 0.9, 0.99], skipna=True))
+    dL, dE, *spread_q = _compute(*reductions)
+    spread_deg = {f"{q:g}": float(np.degrees(v)) for q, v in zip(
+        spread_q[0]["quantile"].values, spread_q[0].values)} if spread_q else {}
     status = np.asarray(ds["status"].values)
     return {
         "size": int(status.size),
@@ -741,8 +746,7 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
         "failed": [int(i) for i in np.nonzero(status == en.STATUS_FAILED)[0]],
         "regime_fractions": fractions,
         "period_quantiles": quantiles,
-        "spread_at_end_deg": {f"{q:g}": float(np.degrees(v)) for q, v in zip(
-            spread_q["quantile"].values, spread_q.values)},
+        "spread_at_end_deg": spread_deg,
         "conservation": {"angular_momentum_rel_drift": float(np.nan_to_num(dL)),
                          "energy_rel_drift": float(np.nan_to_num(dE))},
     }

@@ -90,4 +90,9 @@ def test_ensemble_spread_figure(tmp_path):
     eph = att.propagate(ens, np.linspace(0, 20 * 86400.0, 81))
     paths = plot.save_figures(eph, tmp_path / "cloud")
     assert [p.name for p in paths] == [f"cloud_{n}.png" for n in plot.ENSEMBLE_FIGURES]
-    _non_trivial(paths[0])
+    for p in paths:
+        _non_trivial(p)
+    # a catalogue (no nominal member) gets the population figure only
+    cat = att.propagate(ens.subset(slice(1, None)), np.linspace(0, 86400.0, 11))
+    assert "nominal_body" not in cat.dataset.attrs
+    assert list(plot.figures(cat)) == ["regimes"]

@@ -122,6 +122,7 @@ LAM = { value = 0.5, abs_tol = 0.01 }
     assert res.ok, res.expectations
     rep = res.report()["ensemble"]
     assert list(rep["invalid"]) == ["1"] and "triangle" in rep["invalid"]["1"]
+    assert rep["spread_at_end_deg"] == {}          # a catalogue has no nominal member
     ds = att.Ephemeris.from_netcdf(tmp_path / "debris.nc").dataset
     assert ds.status.values.tolist() == [0, 1, 0]
 
