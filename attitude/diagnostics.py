@@ -122,8 +122,13 @@ class PrincipalSeries:
                                self.moments, self.body)
 
 
-def _bodies(eph: Ephemeris) -> list[RigidBody]:
-    return eph.bodies if eph.is_batch else [eph.body]
+def _nan_result(template):
+    """The diagnostics of a body without motion (an ensemble's invalid input): NaN with
+    the shapes of ``template``, no periods."""
+    ref, series, scalars, _, _ = template
+    return (ref, {k: np.full_like(np.asarray(v, dtype=float), np.nan)
+                  for k, v in series.items()},
+            {k: np.nan for k in scalars}, {}, "")
 
 
 def principal_series(eph: Ephemeris, body_index: int | None = None) -> PrincipalSeries:
@@ -921,11 +926,16 @@ def add_diagnostics(eph: Ephemeris, *, reference_axis: int | None = None,
     >>> bool(abs(float(ds["period_precession"]) / P - 1) < 1e-8)
     True
     """
-    bodies = _bodies(eph)
-    results = []
-    for i in range(len(bodies)):
-        series = principal_series(eph, i if eph.is_batch else None)
-        results.append(_diagnose_one(series, reference_axis, periods))
+    n = eph.dataset.sizes["body"] if eph.is_batch else 1
+    status = (np.asarray(eph.dataset["status"].values) if "status" in eph.dataset
+              else np.zeros(n, dtype=int))
+    results = [None if status[i] else
+               _diagnose_one(principal_series(eph, i if eph.is_batch else None),
+                             reference_axis, periods) for i in range(n)]
+    if all(r is None for r in results):
+        raise DiagnosticsError("no body with a valid motion (every status is non-zero)")
+    template = next(r for r in results if r is not None)
+    results = [r if r is not None else _nan_result(template) for r in results]
     ds = eph.dataset.copy()
     lead = ("body", "time") if eph.is_batch else ("time",)
     sl = ("body",) if eph.is_batch else ()

@@ -415,3 +415,18 @@ def test_attitude_spread_against_scipy_rotations():
     single = att.propagate(ens.bodies[0], ens.states[0], t)
     np.testing.assert_allclose(en.attitude_spread(eph, nominal=single).values,
                                spread.values, atol=1e-7)
+
+
+def test_diagnostics_of_an_ensemble_with_an_invalid_body():
+    from attitude.diagnostics import add_diagnostics
+
+    with pytest.warns(en.InvalidBodiesWarning):
+        ens = att.Ensemble.from_arrays(principal_moments=[[1, 2, 2.5], [1, 1, 3], [2, 2.5, 4]],
+                                       omega_body=[[0.1, 0, 0.2]] * 3, epoch=EPOCH)
+    t = np.linspace(0.0, 500.0, 300)
+    ds = add_diagnostics(att.propagate(ens, t)).dataset
+    assert np.isnan(ds.nutation_angle.values[1]).all() and np.isnan(ds.period_precession[1])
+    one = add_diagnostics(att.propagate(ens.bodies[2], ens.states[2], t)).dataset
+    np.testing.assert_array_equal(ds.nutation_angle.values[2], one.nutation_angle.values)
+    assert float(ds.period_precession[2]) == pytest.approx(float(one.period_precession),
+                                                           rel=1e-12)
