@@ -127,7 +127,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     chunks : int, optional
         Bodies per chunk; alone (no ``client``) it gives a dask-backed ephemeris run by
         dask's current scheduler.  Default with ``client``: about a million epochs per
-        chunk.
+        chunk.  A single body (not a sequence) runs in this process: ``client`` and
+        ``chunks`` are for batches.
 
     ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol``
     only by ``"integrator"``; the exact solution ignores them.  An ensemble, or a batch
@@ -161,10 +162,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
             raise InvalidStateError("an Ensemble carries its states: call "
                                     "propagate(ensemble, times)")
         ensemble = body
-    elif client is not None or chunks is not None:
-        bodies, states, _ = _as_batch([body] if isinstance(body, RigidBody) else body,
-                                      [state] if isinstance(state, AttitudeState) else state)
-        ensemble = Ensemble.from_bodies(bodies, states)
+    elif (client is not None or chunks is not None) and not isinstance(body, RigidBody):
+        ensemble = Ensemble.from_bodies(*_as_batch(body, state)[:2])
     if ensemble is not None:
         return _propagate_ensemble(ensemble, times, torques=torques, method=method,
                                    rtol=rtol, step=step, order=order, progress=progress,

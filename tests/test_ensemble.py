@@ -430,3 +430,11 @@ def test_diagnostics_of_an_ensemble_with_an_invalid_body():
     np.testing.assert_array_equal(ds.nutation_angle.values[2], one.nutation_angle.values)
     assert float(ds.period_precession[2]) == pytest.approx(float(one.period_precession),
                                                            rel=1e-12)
+
+
+def test_a_single_body_with_chunks_runs_in_this_process():
+    body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    state = att.AttitudeState(EPOCH, Rotation.identity(), [0.1, 0.0, 0.2])
+    eph = att.propagate(body, state, [0.0, 1.0, 2.0], chunks=3)
+    assert eph.dataset.quaternion.dims == ("time", "quaternion_component")
+    assert isinstance(eph.dataset.quaternion.data, np.ndarray)
