@@ -389,7 +389,7 @@ class Ensemble:
             for j, k in enumerate(keys):
                 values[k][k0:] = draw[:, j]
         elif sigma:
-            sig = _parameters_si(sigma, spec, "sigma", required=False)
+            sig = _parameters_si(sigma, spec, "sigma")
             for k, s in sig.items():
                 if k not in mean_si:
                     raise InvalidStateError(f"sigma.{k}: no mean value for this parameter")
@@ -537,7 +537,7 @@ def _check_rows(inertia, quaternion, omega):
 # ============================================================================
 # sampling models
 # ============================================================================
-def _parameters_si(values: Mapping, spec: Mapping, what: str, *, required: bool = False,
+def _parameters_si(values: Mapping, spec: Mapping, what: str, *,
                    arrays: bool = False) -> dict:
     out = {}
     for k, v in values.items():
@@ -992,9 +992,13 @@ def propagate_ensemble(ensemble: Ensemble, t: np.ndarray, *, method: str = "exac
                 ensemble.body_to_principal[a:b], ensemble.quaternion[a:b],
                 ensemble.omega_body[a:b], status[a:b], t, method, list(torques), options)
 
-    if client is None and chunks is None:
-        parts = [_propagate_chunk(*args(a, b)) for a, b in bounds]
-        arrays = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    if client is None and chunks is None:         # in place: the output and one chunk
+        arrays = {"q": np.empty((n, T, 4)), "w": np.empty((n, T, 3)),
+                  "L": np.empty((n, T, 3)), "E": np.empty((n, T)),
+                  "status": np.empty(n, dtype=np.int8)}
+        for a, b in bounds:
+            for k, v in _propagate_chunk(*args(a, b)).items():
+                arrays[k][a:b] = v
     else:
         arrays = _dask_arrays(bounds, args, T, client)
     extra = {"status": ("body", arrays.pop("status"), {
