@@ -90,6 +90,11 @@ MODELS = {
     "spin": {"spin_ra": "rad", "spin_dec": "rad", "spin_rate": "rad/s", "ratio_a": "",
              "ratio_b": "", "rotation_angle": "rad", "moment_c": "kg m2"},
 }
+#: The sigma key of each model's isotropic direction error, and its (ra, dec) parameters.
+_DIRECTION = {"tumbling": "angular_momentum_direction", "spin": "spin_direction"}
+_DIRECTION_PARAMETERS = {"tumbling": ("angular_momentum_ra", "angular_momentum_dec"),
+                         "spin": ("spin_ra", "spin_dec")}
+
 #: Defaults of parameters a model does not require.
 _DEFAULTS = {"precession_angle": 0.0, "rotation_angle": 0.0, "moment_c": 1.0}
 
@@ -324,7 +329,12 @@ class Ensemble:
             ``precession_angle``, ``rotation_angle`` and ``moment_c`` default to 0, 0, 1.
         sigma : dict, optional
             Parameter name -> standard deviation (same units as ``mean``); independent
-            normal errors.  Parameters without a sigma are fixed at the mean.
+            normal errors.  Parameters without a sigma are fixed at the mean.  The
+            direction (``"angular_momentum_direction"`` for the tumbling model,
+            ``"spin_direction"`` for the spin model) takes an angle: an isotropic error
+            about the mean direction, the same at the pole as at the equator (the
+            offsets on the sky are normal with this sigma in each of two perpendicular
+            directions), instead of sigmas on the right ascension and declination.
         cov : (k, k) array_like, optional
             Instead of ``sigma``: the covariance of the ``k`` parameters of ``mean``, in
             the order of ``mean``'s keys and in SI units (rad, rad/s, s).
@@ -389,6 +399,12 @@ class Ensemble:
             for j, k in enumerate(keys):
                 values[k][k0:] = draw[:, j]
         elif sigma:
+            sigma = dict(sigma)
+            direction = _DIRECTION[model]
+            if direction in sigma:
+                _scatter_direction(values, mean_si, model, to_si(
+                    sigma.pop(direction), "rad", name=f"sigma.{direction}",
+                    error=InvalidStateError), rng, k0)
             sig = _parameters_si(sigma, spec, "sigma")
             for k, s in sig.items():
                 if k not in mean_si:
@@ -552,6 +568,29 @@ def _parameters_si(values: Mapping, spec: Mapping, what: str, *,
                   error=InvalidStateError)
         out[k] = np.asarray(x, dtype=float) if arrays else float(np.asarray(x))
     return out
+
+
+def _scatter_direction(values, mean_si, model, sigma, rng, k0) -> None:
+    """Isotropic error of ``sigma`` rad about the mean direction (ra, dec): tangent-plane
+    offsets ``(x, y) ~ N(0, sigma^2)`` each, turned into a rotation by
+    ``rho = |(x, y)|`` toward the azimuth ``atan2(y, x)``; written back as ra, dec."""
+    ra_key, dec_key = _DIRECTION_PARAMETERS[model]
+    if ra_key not in mean_si or dec_key not in mean_si:
+        raise InvalidStateError(f"sigma.{_DIRECTION[model]}: needs mean values of "
+                                f"{ra_key} and {dec_key}")
+    if not sigma >= 0:
+        raise InvalidStateError(f"sigma.{_DIRECTION[model]}: must be >= 0, got {sigma}")
+    frame = _l_frame(np.array([mean_si[ra_key]]), np.array([mean_si[dec_key]]))[0]
+    east, north, n0 = frame[:, 0], frame[:, 1], frame[:, 2]
+    m = values[ra_key].size - k0
+    x, y = sigma * rng.standard_normal(m), sigma * rng.standard_normal(m)
+    rho = np.hypot(x, y)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ux, uy = np.where(rho > 0, x / rho, 1.0), np.where(rho > 0, y / rho, 0.0)
+    n = (np.cos(rho)[:, None] * n0 + np.sin(rho)[:, None]
+         * (ux[:, None] * east + uy[:, None] * north))
+    values[ra_key][k0:] = np.arctan2(n[:, 1], n[:, 0]) % (2 * np.pi)
+    values[dec_key][k0:] = np.arcsin(np.clip(n[:, 2], -1.0, 1.0))
 
 
 def _l_frame(ra, dec):

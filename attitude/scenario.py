@@ -255,6 +255,7 @@ def _ensemble(r: _Reader, doc: dict, folder: Path):
     import warnings
 
     from .ensemble import _DEFAULTS as _ENSEMBLE_DEFAULTS
+    from .ensemble import _DIRECTION as _ENSEMBLE_DIRECTION
     from .ensemble import MODELS, Ensemble, InvalidBodiesWarning
 
     if "body" in doc:
@@ -299,19 +300,21 @@ def _ensemble(r: _Reader, doc: dict, folder: Path):
                 kind = "positive" if key == "size" else "non-negative"
                 raise r.fail(f"ensemble.{key}", f"expected a {kind} integer, got {value!r}")
         parsed = {}
+        direction = _ENSEMBLE_DIRECTION[model]
         for part in ("mean", "sigma"):
             sub = table.get(part, {})
             if not isinstance(sub, dict):
                 raise r.fail(f"ensemble.{part}", "expected a table")
-            r.check_keys(sub, spec, f"ensemble.{part}")
-            parsed[part] = {k: r.quantity(v, spec[k], f"ensemble.{part}.{k}")
+            keys = {**spec, direction: "rad"} if part == "sigma" else spec
+            r.check_keys(sub, keys, f"ensemble.{part}")
+            parsed[part] = {k: r.quantity(v, keys[k], f"ensemble.{part}.{k}")
                             for k, v in sub.items()}
         for k in spec:
             if k not in parsed["mean"] and k not in _ENSEMBLE_DEFAULTS:
                 raise r.fail(f"ensemble.mean.{k}", f"missing key (a parameter of the "
                                                    f"{model!r} model)")
         for k in parsed["sigma"]:
-            if k not in parsed["mean"]:
+            if k not in parsed["mean"] and k != direction:
                 raise r.fail(f"ensemble.sigma.{k}", "no ensemble.mean value for it")
         nominal = table.get("include_nominal", True)
         if not isinstance(nominal, bool):

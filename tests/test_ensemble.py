@@ -438,3 +438,25 @@ def test_a_single_body_with_chunks_runs_in_this_process():
     eph = att.propagate(body, state, [0.0, 1.0, 2.0], chunks=3)
     assert eph.dataset.quaternion.dims == ("time", "quaternion_component")
     assert isinstance(eph.dataset.quaternion.data, np.ndarray)
+
+
+@pytest.mark.parametrize("dec", [-75.0, 89.99])
+def test_isotropic_direction_error_is_the_same_at_the_pole(dec):
+    mean = dict(APOPHIS, angular_momentum_dec=dec * u.deg)
+    ens = att.Ensemble.sample(8001, rng=1, epoch=EPOCH, mean=mean,
+                              sigma={"angular_momentum_direction": 3 * u.deg})
+    # the inertial L of the propagated bodies, against the mean direction
+    L = att.propagate(ens, [0.0]).dataset.angular_momentum.values[:, 0]
+    L /= np.linalg.norm(L, axis=1, keepdims=True)
+    angle = np.degrees(np.arccos(np.clip(L[1:] @ L[0], -1.0, 1.0)))
+    # a 2-D normal error of 3 deg per axis: Rayleigh radius, RMS 3 sqrt(2), median
+    # 3 sqrt(2 ln 2); 8000 draws give them to ~1 %
+    assert np.sqrt(np.mean(angle ** 2)) == pytest.approx(3 * np.sqrt(2), rel=0.03)
+    assert np.median(angle) == pytest.approx(3 * np.sqrt(2 * np.log(2)), rel=0.03)
+    # no preferred azimuth: the mean offset across the line of sight vanishes (standard
+    # error 0.0006 per axis; along it, the mean is -(1 - cos rho) ~ -sigma^2)
+    d = (L[1:] - L[0]).mean(axis=0)
+    assert np.linalg.norm(d - (d @ L[0]) * L[0]) < 0.002
+    assert d @ L[0] == pytest.approx(-np.radians(3.0) ** 2, rel=0.05)
+    with pytest.raises(att.InvalidStateError, match="angular_momentum_direction"):
+        att.Ensemble.sample(3, epoch=EPOCH, mean=mean, sigma={"angular_momentum_direction": -1})
