@@ -259,18 +259,21 @@ class Ephemeris:
     def conservation(self) -> dict[str, float]:
         """Largest relative drift of the inertial angular-momentum vector and of the
         kinetic energy from their first sample: ``max |L(t) - L(0)| / |L(0)|`` and
-        ``max |E(t) - E(0)| / E(0)`` (0 for a body at rest)."""
+        ``max |E(t) - E(0)| / E(0)`` (0 for a body at rest).  NaN samples (an
+        ensemble's invalid bodies, a batch body after its terminal event) are skipped."""
         L = self._dataset.angular_momentum.values
         E = self._dataset.kinetic_energy.values
         L0, E0 = L[..., :1, :], E[..., :1]
-        dL = np.linalg.norm(L - L0, axis=-1).max(axis=-1)
+        dL = np.fmax.reduce(np.linalg.norm(L - L0, axis=-1), axis=-1)
         nL = np.linalg.norm(L0, axis=-1)[..., 0]
-        dE = np.abs(E - E0).max(axis=-1)
+        dE = np.fmax.reduce(np.abs(E - E0), axis=-1)
         with np.errstate(invalid="ignore", divide="ignore"):
             rl = np.where(nL > 0, dL / np.where(nL > 0, nL, 1), 0.0)
             re = np.where(E0[..., 0] > 0, dE / np.where(E0[..., 0] > 0, E0[..., 0], 1), 0.0)
-        return {"angular_momentum_rel_drift": float(np.max(rl)),
-                "energy_rel_drift": float(np.max(re))}
+        rl = np.where(np.isnan(nL), np.nan, rl)
+        re = np.where(np.isnan(E0[..., 0]), np.nan, re)
+        return {"angular_momentum_rel_drift": float(np.fmax.reduce(np.ravel(rl))),
+                "energy_rel_drift": float(np.fmax.reduce(np.ravel(re)))}
 
     def __len__(self) -> int:
         return self._dataset.sizes["time"]

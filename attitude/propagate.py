@@ -113,8 +113,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         relative in time on the method's own solution and recorded in the ephemeris
         (``event_time``, ``event_name``, ``event_quaternion``,
         ``event_angular_velocity``; :func:`attitude.events.event_table`); a terminal
-        event ends the ephemeris, its last sample being the event.  Times must be
-        >= 0; terminal events are not available for a batch.
+        event ends the ephemeris, its last sample being the event; in a batch each
+        body stops at its own event (its later samples are NaN).  Times must be >= 0.
 
     client : dask.distributed.Client or str, optional
         Scale out on dask: the ``body`` dimension is split into chunks that run the
@@ -183,10 +183,6 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         if np.any(t < 0):
             raise InvalidStateError("events: propagation with events is forward only; "
                                     "give times >= 0")
-        if batch and any(getattr(ev, "terminal", False) for ev in events):
-            raise InvalidStateError("events: terminal events are not available for a "
-                                    "batch (each body would stop at its own time); use "
-                                    "terminal=False, or propagate the bodies one by one")
         t, q, w, records = _with_events(method, bodies, q0, w0, t, events, torques, step,
                                         order, rtol, progress)
     elif method == "exact":
@@ -353,6 +349,7 @@ def _splitting_events(bodies, q0, w0, t, grid, events, torques, hs, order, progr
     qg, wg = np.full((n, m, 4), np.nan), np.full((n, m, 3), np.nan)
     qg[:, 0], wg[:, 0] = q0, w0
     records = [[] for _ in bodies]
+    stopped = [False] * n
     start = 0
     while start < m - 1:
         end = min(start + _EVENT_CHUNK, m - 1)
@@ -370,26 +367,40 @@ def _splitting_events(bodies, q0, w0, t, grid, events, torques, hs, order, progr
             return qx[0], wx[0]
 
         for i, b in enumerate(bodies):
-            records[i].extend(locate(events, seg, qg[i, start:end + 1],
-                                     wg[i, start:end + 1], b,
-                                     lambda k, x, i=i: state_at(i, k, x)))
+            if not stopped[i]:
+                records[i].extend(locate(events, seg, qg[i, start:end + 1],
+                                         wg[i, start:end + 1], b,
+                                         lambda k, x, i=i: state_at(i, k, x)))
+                stopped[i] = bool(records[i]) and getattr(events[records[i][-1][1]],
+                                                          "terminal", False)
         start = end
-        if n == 1 and records[0] and getattr(events[records[0][-1][1]], "terminal", False):
+        if all(stopped):
             break
     idx = np.searchsorted(grid, t)
     return _truncate(t, qg[:, idx], wg[:, idx], records, events)
 
 
 def _truncate(t, q, w, records, events):
-    """Cut a single body's outputs at its terminal event (the event is the last
-    sample)."""
-    if len(records) == 1 and records[0] and getattr(events[records[0][-1][1]], "terminal",
-                                                    False):
+    """Stop each body at its terminal event.  A single body's outputs are cut there (the
+    event is the last sample); in a batch, whose bodies share the output times, the
+    samples of a body after its terminal event are NaN (its state at the event is in the
+    event variables)."""
+    def stop(recs):
+        return recs[-1][0] if recs and getattr(events[recs[-1][1]], "terminal",
+                                               False) else None
+
+    if len(records) == 1 and stop(records[0]) is not None:
         te, _, qe, we = records[0][-1]
         keep = t < te
         t = np.append(t[keep], te)
         q = np.concatenate([q[:, keep], qe[None, None]], axis=1)
         w = np.concatenate([w[:, keep], we[None, None]], axis=1)
+    elif len(records) > 1:
+        for i, recs in enumerate(records):
+            te = stop(recs)
+            if te is not None:
+                q[i, t > te] = np.nan
+                w[i, t > te] = np.nan
     return t, q, w, records
 
 

@@ -166,9 +166,37 @@ def test_batch_events_per_body():
     single = event_table(att.propagate(SPINNER, SPIN0, np.linspace(0.0, 150.0, 4),
                                        torques=[DAMPER], events=ev, step=0.5))
     assert abs(table[0][0] - single[0][0]) < 1e-9 * single[0][0]
-    with pytest.raises(InvalidStateError, match="terminal events are not available"):
-        att.propagate(bodies, states, [0.0, 10.0], torques=[DAMPER],
-                      events=nutation_crossing(THRESHOLD, "A"))
+
+
+@pytest.mark.parametrize("method", ["splitting", "integrator", "exact"])
+def test_terminal_events_stop_each_body_of_a_batch_at_its_own_time(method):
+    """Each body stops at its own crossing, as it does alone; its later samples are
+    NaN, its earlier ones those of the body alone."""
+    t = np.linspace(0.0, 150.0, 31)
+    if method == "exact":            # torque-free: the nutation angle oscillates
+        bodies = [TRI, TRI.with_name("b")]
+        states = [TRI_STATE, _state([0.07, 0.0, 0.45])]
+        ev, torques = Event(lambda t, q, w, body: w[0], direction=-1, name="wx_down"), []
+        t = np.linspace(0.0, 90.0, 31)
+    else:
+        bodies = [SPINNER, SPINNER.with_name("slow")]
+        states = [SPIN0, _state([0.5, 0.01, 0.01])]
+        ev, torques = nutation_crossing(THRESHOLD, "A"), [DAMPER]
+    eph = att.propagate(bodies, states, t, torques=torques, method=method, events=ev)
+    table = event_table(eph)
+    assert [b for *_, b in table] == [0, 1]
+    assert table[0][0] != pytest.approx(table[1][0], rel=1e-3)
+    for i, (te, _, _) in enumerate(table):
+        alone = att.propagate(bodies[i], states[i], t, torques=torques, method=method,
+                              events=ev)
+        (te1, _), = event_table(alone)
+        assert te == pytest.approx(te1, rel=1e-9)
+        w = eph.dataset.angular_velocity.values[i]
+        assert np.isnan(w[t > te]).all() and np.isfinite(w[t <= te]).all()
+        before = t < te
+        np.testing.assert_allclose(w[before], alone.dataset.angular_velocity.values[
+            :before.sum()], rtol=0, atol=1e-9)
+    assert np.isfinite(eph.conservation()["energy_rel_drift"])
 
 
 @pytest.mark.parametrize("bad, match", [
