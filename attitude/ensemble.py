@@ -1144,10 +1144,17 @@ def local_cluster(n_workers: int = 2, *, threads_per_worker: int = 1, **kwargs):
                             "pip install 'attitude[dask]'") from None
     kwargs.setdefault("dashboard_address", ":0")     # any free port: no clash, no warning
     kwargs.setdefault("processes", True)
-    with _glibc_mmap_threshold(), LocalCluster(
-            n_workers=n_workers, threads_per_worker=threads_per_worker,
-            **kwargs) as cluster, Client(cluster) as client:
-        yield client
+    with _glibc_mmap_threshold():
+        try:
+            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker,
+                                   **kwargs)
+        except RuntimeError as exc:
+            raise AttitudeError(
+                f"the dask LocalCluster did not start ({exc}); in a script, start it under "
+                "'if __name__ == \"__main__\":' (its worker processes re-import the "
+                "script)") from exc
+        with cluster, Client(cluster) as client:     # restarted workers: same environment
+            yield client
 
 
 #: dask's default ``MALLOC_TRIM_THRESHOLD_`` for its worker processes.
