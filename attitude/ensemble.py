@@ -123,6 +123,9 @@ class Ensemble:
         Inertial frame label (:data:`attitude.INERTIAL_FRAMES`).
     names : sequence of str, optional
         One name per body.
+    mass : (N,) array_like or Quantity, optional
+        Masses (kg; NaN where unknown), for torque models that need them (the heavy
+        top).
     parameters : dict of (N,) arrays, optional
         The physical parameters a sampled ensemble was drawn from (SI).
     on_invalid : {"report", "raise"}
@@ -153,13 +156,13 @@ class Ensemble:
 
     __slots__ = ("inertia", "quaternion", "omega_body", "epoch", "frame", "names",
                  "parameters", "invalid", "principal_moments", "body_to_principal",
-                 "nominal")
+                 "nominal", "mass")
 
     def __init__(self, inertia, quaternion, omega_body, *, epoch, frame: str = "ICRF",
                  names: Sequence[str] | None = None,
                  parameters: Mapping[str, np.ndarray] | None = None,
                  on_invalid: str = "report", invalid: Mapping[int, str] | None = None,
-                 nominal: int | None = None):
+                 nominal: int | None = None, mass=None):
         if on_invalid not in ("report", "raise"):
             raise InvalidStateError(f"on_invalid: expected 'report' or 'raise', got "
                                     f"{on_invalid!r}")
@@ -180,6 +183,10 @@ class Ensemble:
         names = [""] * n if names is None else [str(x) for x in names]
         if len(names) != n:
             raise InvalidStateError(f"names: expected {n} names, got {len(names)}")
+        mass = np.full(n, np.nan) if mass is None else np.array(to_si(
+            mass, "kg", name="mass", error=InvalidInertiaError), dtype=float, ndmin=1)
+        if mass.shape != (n,):
+            raise InvalidInertiaError(f"mass: expected {n} masses, got shape {mass.shape}")
         checked, moments, b2p = _check_rows(inertia, quaternion, omega)
         invalid = {int(i): str(why) for i, why in (invalid or {}).items()}
         invalid = dict(sorted({**checked, **invalid}.items()))
@@ -200,7 +207,8 @@ class Ensemble:
                             ("frame", check_frame(frame)), ("names", tuple(names)),
                             ("parameters", params), ("invalid", dict(invalid)),
                             ("principal_moments", moments), ("body_to_principal", b2p),
-                            ("nominal", None if nominal is None else int(nominal))):
+                            ("nominal", None if nominal is None else int(nominal)),
+                            ("mass", mass)):
             if isinstance(value, np.ndarray):
                 value.flags.writeable = False
             object.__setattr__(self, slot, value)
@@ -247,6 +255,7 @@ class Ensemble:
                    np.stack([s.attitude.as_quat() for s in states]),
                    np.stack([s.omega_body for s in states]), epoch=states[0].epoch,
                    frame=states[0].frame, names=[b.name for b in bodies],
+                   mass=[np.nan if b.mass is None else b.mass for b in bodies],
                    on_invalid="raise")
 
     @classmethod
@@ -446,7 +455,8 @@ class Ensemble:
     @property
     def bodies(self) -> list[RigidBody | None]:
         """The bodies as :class:`~attitude.RigidBody` objects (None for invalid rows)."""
-        return [RigidBody(self.inertia[i], name=self.names[i]) if ok else None
+        return [RigidBody(self.inertia[i], name=self.names[i], mass=self.mass[i]
+                          if np.isfinite(self.mass[i]) else None) if ok else None
                 for i, ok in enumerate(self.valid)]
 
     @property
@@ -930,7 +940,8 @@ def spread_quantiles(eph, q=(0.5, 0.9, 0.99), nominal=0) -> xr.DataArray:
 # ============================================================================
 # propagation in chunks, locally or on dask
 # ============================================================================
-def _propagate_chunk(inertia, moments, b2p, q0, w0, status, t, method, torques, options):
+def _propagate_chunk(inertia, mass, moments, b2p, q0, w0, status, t, method, torques,
+                     options):
     """The numpy kernel of one chunk of bodies: ``{"q", "w", "L", "E", "status"}``.
 
     Invalid rows come back NaN with their status; if the vectorised run fails, the
@@ -944,8 +955,8 @@ def _propagate_chunk(inertia, moments, b2p, q0, w0, status, t, method, torques, 
     ok = out["status"] == STATUS_OK
 
     def run(rows):
-        q, w = _kernel(inertia[rows], moments[rows], b2p[rows], q0[rows], w0[rows], t,
-                       method, torques, options)
+        q, w = _kernel(inertia[rows], mass[rows], moments[rows], b2p[rows], q0[rows],
+                       w0[rows], t, method, torques, options)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(w))):
             raise FloatingPointError("non-finite result")
         return q, w
@@ -968,10 +979,10 @@ def _propagate_chunk(inertia, moments, b2p, q0, w0, status, t, method, torques, 
     return out
 
 
-def _kernel(inertia, moments, b2p, q0, w0, t, method, torques, options):
+def _kernel(inertia, mass, moments, b2p, q0, w0, t, method, torques, options):
     if method == "exact":
         return exact_arrays(moments, b2p, q0, w0, t)
-    bodies = [RigidBody(m) for m in inertia]
+    bodies = [RigidBody(i, mass=m if np.isfinite(m) else None) for i, m in zip(inertia, mass)]
     if method == "splitting":
         from .splitting import integrate_splitting
 
@@ -1027,7 +1038,7 @@ def propagate_ensemble(ensemble: Ensemble, t: np.ndarray, *, method: str = "exac
     bounds = [(a, min(a + size, n)) for a in range(0, n, size)]
 
     def args(a, b):
-        return (ensemble.inertia[a:b], ensemble.principal_moments[a:b],
+        return (ensemble.inertia[a:b], ensemble.mass[a:b], ensemble.principal_moments[a:b],
                 ensemble.body_to_principal[a:b], ensemble.quaternion[a:b],
                 ensemble.omega_body[a:b], status[a:b], t, method, list(torques), options)
 

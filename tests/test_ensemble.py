@@ -460,3 +460,22 @@ def test_isotropic_direction_error_is_the_same_at_the_pole(dec):
     assert d @ L[0] == pytest.approx(-np.radians(3.0) ** 2, rel=0.05)
     with pytest.raises(att.InvalidStateError, match="angular_momentum_direction"):
         att.Ensemble.sample(3, epoch=EPOCH, mean=mean, sigma={"angular_momentum_direction": -1})
+
+
+def test_masses_travel_with_the_bodies_for_torques_that_need_them():
+    """The heavy top takes its mass from the body: chunked (ensemble) and direct batch
+    propagation agree, and the ensemble keeps the masses."""
+    from attitude.torques import HeavyTopPivot
+
+    bodies = [att.RigidBody.from_principal_moments([1.0, 1.0, 0.5], mass=2.0),
+              att.RigidBody.from_principal_moments([1.0, 1.0, 0.6], mass=3.0)]
+    states = [att.AttitudeState(EPOCH, Rotation.from_euler("x", 0.3), [0.0, 0.0, 30.0])] * 2
+    top = [HeavyTopPivot(pivot_to_com=[0.0, 0.0, 0.1])]
+    t = np.linspace(0.0, 1.0, 5)
+    ref = att.propagate(bodies, states, t, torques=top, method="integrator")
+    lazy = att.propagate(bodies, states, t, torques=top, method="integrator", chunks=1)
+    assert lazy.dataset.status.values.tolist() == [0, 0]
+    np.testing.assert_array_equal(lazy.dataset.quaternion.values,
+                                  ref.dataset.quaternion.values)
+    ens = att.Ensemble.from_bodies(bodies, states)
+    assert ens.mass.tolist() == [2.0, 3.0] and ens.bodies[1].mass == 3.0
