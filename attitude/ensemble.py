@@ -452,19 +452,30 @@ class Ensemble:
         ok[list(self.invalid)] = False
         return ok
 
+    def body_at(self, index: int) -> RigidBody | None:
+        """Body ``index`` as a :class:`~attitude.RigidBody` (None for an invalid row)."""
+        if index in self.invalid:
+            return None
+        mass = self.mass[index]
+        return RigidBody(self.inertia[index], name=self.names[index],
+                         mass=mass if np.isfinite(mass) else None)
+
+    def state_at(self, index: int) -> AttitudeState | None:
+        """The initial state of body ``index`` (None for an invalid row)."""
+        if index in self.invalid:
+            return None
+        return AttitudeState(self.epoch, Rotation.from_quat(self.quaternion[index]),
+                             self.omega_body[index], frame=self.frame)
+
     @property
     def bodies(self) -> list[RigidBody | None]:
         """The bodies as :class:`~attitude.RigidBody` objects (None for invalid rows)."""
-        return [RigidBody(self.inertia[i], name=self.names[i], mass=self.mass[i]
-                          if np.isfinite(self.mass[i]) else None) if ok else None
-                for i, ok in enumerate(self.valid)]
+        return [self.body_at(i) for i in range(len(self))]
 
     @property
     def states(self) -> list[AttitudeState | None]:
         """The initial states (None for invalid rows)."""
-        return [AttitudeState(self.epoch, Rotation.from_quat(self.quaternion[i]),
-                              self.omega_body[i], frame=self.frame) if ok else None
-                for i, ok in enumerate(self.valid)]
+        return [self.state_at(i) for i in range(len(self))]
 
     def omega_principal(self) -> np.ndarray:
         """(N, 3) rates in principal-frame components (rad/s)."""

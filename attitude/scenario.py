@@ -334,7 +334,7 @@ def _nominal(r: _Reader, ensemble) -> tuple[RigidBody, AttitudeState]:
         first = next(iter(ensemble.invalid.items()))
         raise r.fail("ensemble", f"no valid body (body {first[0]}: {first[1]})")
     i = int(valid[0])
-    return ensemble.bodies[i], ensemble.states[i]
+    return ensemble.body_at(i), ensemble.state_at(i)
 
 
 def _torques(r: _Reader, tables, epoch) -> tuple:
