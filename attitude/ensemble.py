@@ -233,8 +233,7 @@ class Ensemble:
             if m.ndim != 2 or m.shape[1] != 3:
                 raise InvalidInertiaError(f"principal_moments: expected shape (N, 3), got "
                                           f"{m.shape}")
-            inertia = np.zeros((m.shape[0], 3, 3))
-            inertia[:, [0, 1, 2], [0, 1, 2]] = m
+            inertia = _diagonal(m)
         omega = np.array(to_si(omega_body, "rad/s", name="omega_body",
                                error=InvalidStateError), dtype=float, ndmin=2)
         if quaternion is None:
@@ -286,10 +285,8 @@ class Ensemble:
         columns = _read_table(table)
         get = _column_getter(columns)
         if all(k in columns for k in ("A", "B", "C")):
-            moments = np.column_stack([get(k, "kg m2") for k in ("A", "B", "C")])
-            n = moments.shape[0]
-            inertia = np.zeros((n, 3, 3))
-            inertia[:, [0, 1, 2], [0, 1, 2]] = moments
+            inertia = _diagonal(np.column_stack([get(k, "kg m2") for k in ("A", "B", "C")]))
+            n = inertia.shape[0]
         elif all(k in columns for k in ("Ixx", "Iyy", "Izz")):
             xx, yy, zz = (get(k, "kg m2") for k in ("Ixx", "Iyy", "Izz"))
             n = xx.size
@@ -430,8 +427,7 @@ class Ensemble:
                                     f"the {model!r} model (all: {', '.join(spec)})")
         build = tumbling_state if model == "tumbling" else spin_state
         moments, q, w, bad = build(**{k: values[k] for k in spec})
-        inertia = np.zeros((n, 3, 3))
-        inertia[:, [0, 1, 2], [0, 1, 2]] = np.where(np.isfinite(moments), moments, 1.0)
+        inertia = _diagonal(np.where(np.isfinite(moments), moments, 1.0))
         names = ["nominal" if i < k0 else f"sample {i}" for i in range(n)]
         return cls(inertia, q, w, epoch=epoch, frame=frame, names=names,
                    parameters=values, invalid=bad, nominal=0 if k0 else None)
@@ -528,15 +524,25 @@ def check_batch(bodies, states) -> tuple[list[RigidBody], list[AttitudeState]]:
 # ============================================================================
 # row validation and principal frames, vectorised
 # ============================================================================
+def _diagonal(moments) -> np.ndarray:
+    """(N, 3, 3) inertia tensors of bodies whose frame is their principal frame."""
+    return np.asarray(moments, dtype=float)[:, :, None] * np.eye(3)
+
+
+def _invalid_where(mask, reason) -> dict[int, str]:
+    """``{index: reason(index)}`` of the rows where ``mask`` is true."""
+    return {int(i): reason(int(i)) for i in np.nonzero(mask)[0]}
+
+
 def _check_rows(inertia, quaternion, omega):
     """Invalid rows ``{index: reason}``, principal moments (N, 3) and body -> principal
     quaternions (N, 4) (identity placeholders on invalid rows)."""
     n = inertia.shape[0]
     invalid: dict[int, str] = {}
 
-    def flag(mask, reason):
-        for i in np.nonzero(mask)[0]:
-            invalid.setdefault(int(i), reason(int(i)))
+    def flag(mask, reason):                 # the first reason of a row is kept
+        for i, why in _invalid_where(mask, reason).items():
+            invalid.setdefault(i, why)
 
     finite = np.all(np.isfinite(inertia), axis=(1, 2))
     flag(~finite, lambda i: "inertia has a non-finite element; give finite kg m^2 values")
@@ -623,10 +629,6 @@ def _l_frame(ra, dec):
     norm = np.linalg.norm(node, axis=-1, keepdims=True)
     node = np.where(norm < 1e-12, [0.0, 1.0, 0.0], node / np.where(norm < 1e-12, 1.0, norm))
     return np.stack([node, np.cross(n, node), n], axis=-1)
-
-
-def _invalid_where(mask, reason) -> dict[int, str]:
-    return {int(i): reason(int(i)) for i in np.nonzero(mask)[0]}
 
 
 def _moments(ratio_a, ratio_b, moment_c):
@@ -778,22 +780,17 @@ def _column_getter(columns):
             values = np.asarray(values, dtype=float)
         except (TypeError, ValueError):
             raise InvalidStateError(f"table column {name}: expected numbers") from None
-        if unit:
-            return to_si(values * u.Unit(unit) if _unit_ok(unit, name) else values, si or
-                         u.dimensionless_unscaled, name=f"table column {name}",
-                         error=InvalidStateError)
-        return values
+        if not unit:
+            return values
+        try:
+            values = values * u.Unit(unit)
+        except ValueError:
+            raise InvalidStateError(f"table column {name}: cannot parse the unit "
+                                    f"[{unit}]") from None
+        return to_si(values, si or u.dimensionless_unscaled, name=f"table column {name}",
+                     error=InvalidStateError)
 
     return get
-
-
-def _unit_ok(unit: str, name: str) -> bool:
-    try:
-        u.Unit(unit)
-    except ValueError:
-        raise InvalidStateError(f"table column {name}: cannot parse the unit "
-                                f"[{unit}]") from None
-    return True
 
 
 # ============================================================================
