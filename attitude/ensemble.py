@@ -45,7 +45,7 @@ from . import _quat
 from ._units import to_si
 from .body import TRIANGLE_RTOL, RigidBody
 from .errors import AttitudeError, AttitudeWarning, InvalidInertiaError, InvalidStateError
-from .state import AttitudeState, as_epoch, check_frame
+from .state import AttitudeState, as_epoch, check_frame, direction_frame
 
 __all__ = [
     "Ensemble",
@@ -607,7 +607,7 @@ def _scatter_direction(values, mean_si, model, sigma, rng, k0) -> None:
                                 f"{ra_key} and {dec_key}")
     if not sigma >= 0:
         raise InvalidStateError(f"sigma.{_DIRECTION[model]}: must be >= 0, got {sigma}")
-    frame = _l_frame(np.array([mean_si[ra_key]]), np.array([mean_si[dec_key]]))[0]
+    frame = direction_frame(mean_si[ra_key], mean_si[dec_key])
     east, north, n0 = frame[:, 0], frame[:, 1], frame[:, 2]
     m = values[ra_key].size - k0
     x, y = sigma * rng.standard_normal(m), sigma * rng.standard_normal(m)
@@ -618,17 +618,6 @@ def _scatter_direction(values, mean_si, model, sigma, rng, k0) -> None:
          * (ux[:, None] * east + uy[:, None] * north))
     values[ra_key][k0:] = np.arctan2(n[:, 1], n[:, 0]) % (2 * np.pi)
     values[dec_key][k0:] = np.arcsin(np.clip(n[:, 2], -1.0, 1.0))
-
-
-def _l_frame(ra, dec):
-    """(N, 3, 3) rotation whose z column points to (ra, dec) and whose x column is the
-    node ``z_inertial x n`` (y when n is a pole) - the convention of
-    :func:`attitude.scenario.spin_axis_state`."""
-    n = np.stack([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)], axis=-1)
-    node = np.cross([0.0, 0.0, 1.0], n)
-    norm = np.linalg.norm(node, axis=-1, keepdims=True)
-    node = np.where(norm < 1e-12, [0.0, 1.0, 0.0], node / np.where(norm < 1e-12, 1.0, norm))
-    return np.stack([node, np.cross(n, node), n], axis=-1)
 
 
 def _moments(ratio_a, ratio_b, moment_c):
@@ -702,7 +691,7 @@ def tumbling_state(angular_momentum_ra, angular_momentum_dec, energy_ratio, rati
     # principal -> inertial: L frame, then Rz(phi) Rx(theta) Rz(psi) (kernel frame for LAM)
     theta = np.arctan2(st, ct)
     euler = Rotation.from_euler("ZXZ", np.stack([phi, theta, psi], axis=-1))
-    r_l = Rotation.from_matrix(_l_frame(ra, dec))
+    r_l = Rotation.from_matrix(direction_frame(ra, dec))
     kernel_to_principal = np.where(lam[:, None], Rotation.from_matrix(
         [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]]).as_quat()[None],
         [0.0, 0.0, 0.0, 1.0])
@@ -727,7 +716,8 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
                                     rotation_angle, moment_c)))
     m, bad = _moments(ra_, rb, mc)
     bad.update(_invalid_where(~np.isfinite(rate), lambda i: "spin rate must be finite"))
-    q = (Rotation.from_matrix(_l_frame(ra, dec)) * Rotation.from_euler("Z", psi[:, None])).as_quat()
+    q = (Rotation.from_matrix(direction_frame(ra, dec))
+         * Rotation.from_euler("Z", psi[:, None])).as_quat()
     omega = np.stack([np.zeros_like(rate), np.zeros_like(rate), rate], axis=-1)
     return m, q, omega, dict(sorted(bad.items()))
 

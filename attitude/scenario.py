@@ -23,7 +23,7 @@ from ._units import parse_quantity
 from .body import MassProperties, RigidBody
 from .errors import AttitudeError, ScenarioError
 from .regimes import PERIOD_KEYS, REGIMES
-from .state import AttitudeState, check_frame
+from .state import AttitudeState, check_frame, direction_frame
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
            "spin_axis_state", "known_variables", "SCHEMA", "EXPECT_KEYS"]
@@ -471,16 +471,9 @@ def spin_axis_state(body: RigidBody, ra: float, dec: float, rate: float,
     the node ``z x n`` (along ``y`` when ``n`` is a pole).
     """
     k = "ABC".index(about)
-    n = np.array([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)])
-    node = np.cross([0.0, 0.0, 1.0], n)
-    if np.linalg.norm(node) < 1e-12:
-        node = np.array([0.0, 1.0, 0.0])
-    node /= np.linalg.norm(node)
-    third = np.cross(n, node)
     # principal -> inertial: column k is n, column k+1 the node, column k+2 completes
-    m = np.empty((3, 3))
-    m[:, k], m[:, (k + 1) % 3], m[:, (k + 2) % 3] = n, node, third
-    principal_to_inertial = Rotation.from_matrix(m)
+    frame = direction_frame(np.float64(ra), np.float64(dec))       # columns node, ., n
+    principal_to_inertial = Rotation.from_matrix(np.roll(frame, k + 1, axis=-1))
     attitude = principal_to_inertial * body.body_to_principal
     axis_body = body.principal_axes[:, k]
     return attitude, rate * axis_body

@@ -20,7 +20,8 @@ from ._units import to_si
 from .body import RigidBody
 from .errors import InvalidStateError
 
-__all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL"]
+__all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
+           "direction_frame"]
 
 #: Inertial frame labels accepted (case-insensitive).  No frame conversion is ever done:
 #: the label travels with the data.  ``INERTIAL`` is a generic label for synthetic studies.
@@ -73,6 +74,19 @@ def as_omega(omega, *, name: str = "omega_body", error=InvalidStateError) -> np.
         raise error(f"{name} = {w.tolist()} rad/s: every component must be finite "
                     "(NaN or inf rates cannot be propagated)")
     return w
+
+
+def direction_frame(ra, dec) -> np.ndarray:
+    """Right-handed frames ``(..., 3, 3)`` (columns: x, y, z in inertial components)
+    whose z axis points to right ascension ``ra``, declination ``dec`` (rad) and whose x
+    axis is the node ``z_inertial x n`` of that direction (the inertial y axis at a
+    pole).  The frame of a spin-axis state and of the angular momentum of a sampled
+    tumbler."""
+    n = np.stack([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)], axis=-1)
+    node = np.cross([0.0, 0.0, 1.0], n)
+    norm = np.linalg.norm(node, axis=-1, keepdims=True)
+    node = np.where(norm < 1e-12, [0.0, 1.0, 0.0], node / np.where(norm < 1e-12, 1.0, norm))
+    return np.stack([node, np.cross(n, node), n], axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
