@@ -985,11 +985,9 @@ def _kernel(inertia, mass, moments, b2p, q0, w0, t, method, torques, options):
         from .splitting import integrate_splitting
 
         return integrate_splitting(bodies, q0, w0, t, torques=torques, **options)
-    from .integrate import integrate_reference
+    from .integrate import integrate_reference_batch
 
-    results = [integrate_reference(b, q0[i], w0[i], t, torques=torques, **options)
-               for i, b in enumerate(bodies)]
-    return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
+    return integrate_reference_batch(bodies, q0, w0, t, torques=torques, **options)
 
 
 def exact_arrays(moments, b2p, q0, w0, t):

@@ -26,7 +26,8 @@ from . import _quat
 from .body import RigidBody
 from .errors import PropagationError
 
-__all__ = ["integrate_reference", "DEFAULT_RTOL", "DEFAULT_ATOL_SCALE"]
+__all__ = ["integrate_reference", "integrate_reference_batch", "DEFAULT_RTOL",
+           "DEFAULT_ATOL_SCALE"]
 
 #: Relative tolerance of the reference integrator.
 DEFAULT_RTOL = 1e-13
@@ -108,6 +109,16 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
         out[order] = sol.y.T
     q = out[:, :4] / np.linalg.norm(out[:, :4], axis=1, keepdims=True)
     return q, out[:, 4:]
+
+
+def integrate_reference_batch(bodies: Sequence[RigidBody], quat0, omega0, t, **kwargs
+                              ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`integrate_reference` for each of N bodies (one after the other: each has
+    its own adaptive steps): ``quat0`` (N, 4), ``omega0`` (N, 3) -> ``(N, T, 4),
+    (N, T, 3)``; ``kwargs`` as for :func:`integrate_reference`."""
+    results = [integrate_reference(b, quat0[i], omega0[i], t, **kwargs)
+               for i, b in enumerate(bodies)]
+    return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
 
 
 def integrate_reference_events(body: RigidBody, quat0, omega0, t, events, *,

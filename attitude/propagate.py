@@ -20,7 +20,7 @@ from .ensemble import Ensemble, check_batch
 from .ephemeris import Ephemeris
 from .errors import InvalidStateError
 from .events import as_events, locate, name_of
-from .integrate import integrate_reference, integrate_reference_events
+from .integrate import integrate_reference_batch, integrate_reference_events
 from .state import AttitudeState
 
 __all__ = ["propagate", "METHODS", "elapsed_seconds"]
@@ -194,10 +194,7 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
                                    order=4 if order is None else order, progress=progress)
     else:
         kwargs = {} if rtol is None else {"rtol": rtol}
-        results = [integrate_reference(b, q0[i], w0[i], t, torques=torques, **kwargs)
-                   for i, b in enumerate(bodies)]
-        q = np.stack([r[0] for r in results])
-        w = np.stack([r[1] for r in results])
+        q, w = integrate_reference_batch(bodies, q0, w0, t, torques=torques, **kwargs)
     if not batch:
         q, w, bodies = q[0], w[0], bodies[0]
     name = bodies.name if isinstance(bodies, RigidBody) else "batch"
