@@ -87,16 +87,10 @@ def _expectation_cells(e: dict) -> tuple[str, str, str, str]:
 
 def _expectation_line(e: dict) -> str:
     """``ok   precession: expected 27.38 +/- 0.0821 h, got 27.38``."""
-    status = "ok  " if e["ok"] else "FAIL"
-    unit = f" {e['unit']}" if "unit" in e else ""
+    key, expected, tolerance, got = _expectation_cells(e)
     if "tolerance" in e:
-        expected = f"{_number(e['expected'])} +/- {e['tolerance']:.3g}{unit}"
-    elif e["key"] == "regime":
-        expected = e["expected"]
-    else:
-        expected = f"<= {e['expected']:.3g}"
-    got = "absent" if e["got"] is None else _number(e["got"]) + unit
-    return f"{status} {e['key']}: expected {expected}, got {got}"
+        expected = f"{_number(e['expected'])} {tolerance}"
+    return f"{'ok  ' if e['ok'] else 'FAIL'} {key}: expected {expected}, got {got}"
 
 
 def _summary_rows(result) -> list[tuple[str, str]]:
