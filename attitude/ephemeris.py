@@ -259,21 +259,12 @@ class Ephemeris:
     def conservation(self) -> dict[str, float]:
         """Largest relative drift of the inertial angular-momentum vector and of the
         kinetic energy from their first sample: ``max |L(t) - L(0)| / |L(0)|`` and
-        ``max |E(t) - E(0)| / E(0)`` (0 for a body at rest).  NaN samples (an
-        ensemble's invalid bodies, a batch body after its terminal event) are skipped."""
-        L = self._dataset.angular_momentum.values
-        E = self._dataset.kinetic_energy.values
-        L0, E0 = L[..., :1, :], E[..., :1]
-        dL = np.fmax.reduce(np.linalg.norm(L - L0, axis=-1), axis=-1)
-        nL = np.linalg.norm(L0, axis=-1)[..., 0]
-        dE = np.fmax.reduce(np.abs(E - E0), axis=-1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            rl = np.where(nL > 0, dL / np.where(nL > 0, nL, 1), 0.0)
-            re = np.where(E0[..., 0] > 0, dE / np.where(E0[..., 0] > 0, E0[..., 0], 1), 0.0)
-        rl = np.where(np.isnan(nL), np.nan, rl)
-        re = np.where(np.isnan(E0[..., 0]), np.nan, re)
-        return {"angular_momentum_rel_drift": float(np.fmax.reduce(np.ravel(rl))),
-                "energy_rel_drift": float(np.fmax.reduce(np.ravel(re)))}
+        ``max |E(t) - E(0)| / E(0)`` (0 for a body at rest), over the bodies of a batch
+        (:func:`relative_drifts`).  NaN samples (an ensemble's invalid bodies, a batch
+        body after its terminal event) are skipped."""
+        dL, dE = relative_drifts(self._dataset)
+        return {"angular_momentum_rel_drift": float(dL.max()),
+                "energy_rel_drift": float(dE.max())}
 
     def __len__(self) -> int:
         return self._dataset.sizes["time"]
@@ -327,6 +318,21 @@ def _body_arrays(body):
     bodies = list(body)
     return (np.stack([b.inertia for b in bodies]),
             np.stack([b.principal_moments for b in bodies]), [b.name for b in bodies], None)
+
+
+def relative_drifts(dataset: xr.Dataset) -> tuple[xr.DataArray, xr.DataArray]:
+    """Per body (a scalar for one body) the largest relative drift of the inertial
+    angular-momentum vector and of the kinetic energy from the first sample, skipping NaN
+    samples: 0 for a body at rest, NaN for a body without a first sample.  Lazy when the
+    dataset is dask-backed (an ensemble), so a reduction of it runs chunk by chunk."""
+    L, E = dataset["angular_momentum"], dataset["kinetic_energy"]
+    L0, E0 = L.isel(time=0), E.isel(time=0)
+    nL = ((L0 ** 2).sum("axis", skipna=False)) ** 0.5
+    dL = (((L - L0) ** 2).sum("axis", skipna=False) ** 0.5).max("time")
+    dE = abs(E - E0).max("time")
+    rel_L = (dL / nL.where(nL > 0)).where(nL != 0, 0.0)
+    rel_E = (dE / E0.where(E0 > 0)).where(E0 != 0, 0.0)
+    return rel_L, rel_E
 
 
 def momentum_and_energy(inertia, q, w):

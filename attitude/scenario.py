@@ -709,6 +709,7 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
     ensembles; empty for a catalogue), the worst conservation over the valid bodies,
     and the invalid bodies: plain JSON types."""
     from . import ensemble as en
+    from .ephemeris import relative_drifts
 
     ens = scenario.ensemble
     if scenario.torques:
@@ -723,10 +724,7 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
                      for k in pq["period"].values}
     ds = eph.dataset
     ok = ds["status"] == en.STATUS_OK
-    L, E = ds["angular_momentum"], ds["kinetic_energy"]
-    L0, E0 = L.isel(time=0), E.isel(time=0)
-    dL = (((L - L0) ** 2).sum("axis") ** 0.5).max("time") / (L0 ** 2).sum("axis") ** 0.5
-    dE = abs(E - E0).max("time") / E0
+    dL, dE = relative_drifts(ds)
     reductions = [dL.where(ok).max(), dE.where(ok).max()]
     if ens.nominal is not None and ens.valid[ens.nominal]:   # a sampled cloud
         spread = en.attitude_spread(eph, ens.nominal).isel(time=-1).where(ok)
