@@ -97,23 +97,25 @@ def _summary_rows(result) -> list[tuple[str, str]]:
     """The summary of ``attitude run`` as ``(quantity, value)`` rows, without the
     expectations (one table, plain or rich, is made from them)."""
     sc, eph, d = result.scenario, result.ephemeris, result.diagnosis
+    method = sc.method or ("splitting" if sc.torques else "exact")
+    scenario = ("Scenario", f"{sc.name}  ({sc.path})")
+    run = ("Run", f"{len(eph)} epochs over {_format_seconds(sc.duration)}, step "
+                  f"{_format_seconds(sc.step)}, method {method}")
+    if result.ensemble is not None:
+        return [scenario] + _ensemble_rows(result, run)
     body, state = sc.body, sc.state
     A, B, C = body.principal_moments
     w = state.omega_body
     wn = math.degrees(float((w @ w) ** 0.5))
-    method = sc.method or ("splitting" if sc.torques else "exact")
     rows = [
-        ("Scenario", f"{sc.name}  ({sc.path})"),
+        scenario,
         ("Body", f"A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 ({body.symmetry})"
          + (f", mass {body.mass:.6g} kg" if body.mass is not None else "")),
         ("State", f"epoch {state.epoch.isot} {state.epoch.scale.upper()}, frame {state.frame},"
                   f" |omega| = {wn:.6g} deg/s"),
-        ("Run", f"{len(eph)} epochs over {_format_seconds(sc.duration)}, step "
-                f"{_format_seconds(sc.step)}, method {method}"),
+        run,
     ]
     periods = ", ".join(f"{k} {_format_seconds(v)}" for k, v in result.periods.items())
-    if result.ensemble is not None:
-        return rows[:1] + _ensemble_rows(result, rows[3][1])
     if sc.torques:
         rows.append(("Motion", f"initial state (torque-free): {d.regime}"))
         c = result.classification
@@ -143,7 +145,7 @@ def _summary_rows(result) -> list[tuple[str, str]]:
     return rows
 
 
-def _ensemble_rows(result, run: str) -> list[tuple[str, str]]:
+def _ensemble_rows(result, run: tuple[str, str]) -> list[tuple[str, str]]:
     """Summary rows of an ensemble run (population, regimes, period quantiles, spread)."""
     e, sc = result.ensemble, result.scenario
     bad = len(e["invalid"]) + len(e["failed"])
@@ -151,7 +153,7 @@ def _ensemble_rows(result, run: str) -> list[tuple[str, str]]:
              + (f", {len(e['invalid'])} invalid input, {len(e['failed'])} failed"
                 if bad else "") + f"; epoch {sc.state.epoch.isot} "
              f"{sc.state.epoch.scale.upper()}, frame {sc.state.frame}"),
-            ("Run", run),
+            run,
             ("Regimes", ", ".join(f"{k} {100 * v:.1f} %" for k, v in
                                   e["regime_fractions"].items()) or "none")]
     for i, why in list(e["invalid"].items())[:5]:
