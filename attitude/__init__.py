@@ -8,39 +8,55 @@ Mass properties in, time-tagged attitude ephemerides out::
     eph = att.propagate(body, state, times)
     eph.to_netcdf("out.nc")
 
-See ``API.md``-level names in ``__all__``.
+The package follows the pipeline *mass properties -> state -> propagation -> ephemeris
+-> analysis -> formats / CLI* (docs/architecture.md): model modules at the top level
+(``body``, ``shape``, ``state``, ``orbit``, ``torques``, ``ephemeris``, ``population``),
+the propagation wing (``attitude.propagation``), the analysis modules (``diagnostics``,
+``classify``, ``lyapunov``, ``statistics``), the file-format wing (``attitude.formats``)
+and the application layer (``scenario``, ``cli``, ``plot``).  The public names are in
+``__all__``.
 """
 
 from __future__ import annotations
 
+import sys
+
 from . import (
-    _units,  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
     ensemble,  # noqa: F401  (att.ensemble.regime_fractions, ...)
+    quantities,  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
     torques,  # noqa: F401  (att.torques.GravityGradient, ...)
 )
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
-from .classify import Classification, ClassificationError, classify
-from .diagnostics import DiagnosticsError, InsufficientDataError
-from .ensemble import Ensemble, InvalidBodiesWarning
+from .classify import Classification, classify
+from .deprecation import MOVED_MODULES, install
 from .ephemeris import Ephemeris
 from .errors import (
     AttitudeError,
     AttitudeWarning,
+    ClassificationError,
+    DiagnosticsError,
     EphemerisFormatError,
+    InsufficientDataError,
+    InvalidBodiesWarning,
     InvalidInertiaError,
     InvalidStateError,
     NearSeparatrixWarning,
+    OrbitError,
     PropagationError,
     ScenarioError,
     ShapeModelError,
+    TorqueConfigError,
 )
-from .events import Event, event_table, nutation_crossing
-from .orbit import KeplerOrbit, OrbitError
-from .propagate import propagate
+from .orbit import KeplerOrbit
+from .population import Ensemble
+from .propagation.events import Event, event_table, nutation_crossing
+from .propagation.propagator import propagate
+from .propagation.torquefree import diagnose
 from .state import INERTIAL_FRAMES, AttitudeState
-from .torques import TorqueConfigError
+from .version import __version__
 
-__version__ = "0.1.0"
+install()   # the module paths of earlier releases (attitude.splitting, ...) as aliases
+
 
 __all__ = [
     "__version__",
@@ -80,9 +96,8 @@ __all__ = [
 
 
 def __getattr__(name):
-    # The exact torque-free module is imported on first use (it pulls in scipy.special).
-    if name == "diagnose":
-        from .torquefree import diagnose
-
-        return diagnose
+    # att.splitting, att.aem, ...: the deprecated aliases of moved modules
+    old = f"{__name__}.{name}"
+    if old in MOVED_MODULES:
+        return sys.modules[old]
     raise AttributeError(f"module 'attitude' has no attribute {name!r}")

@@ -31,8 +31,9 @@ from os import PathLike
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._units import to_si
 from .errors import InvalidInertiaError
+from .quantities import to_si
+from .shape import Polyhedron
 
 __all__ = [
     "MassProperties",
@@ -40,6 +41,7 @@ __all__ = [
     "SYMMETRY_RTOL",
     "TRIANGLE_RTOL",
     "SYMMETRIC_TENSOR_RTOL",
+    "diagonal_inertia",
 ]
 
 #: Two principal moments are treated as equal (axisymmetric body) when they differ by
@@ -53,6 +55,19 @@ TRIANGLE_RTOL = 1e-10
 
 #: Allowed asymmetry of an input tensor, relative to its largest element.
 SYMMETRIC_TENSOR_RTOL = 1e-10
+
+
+def diagonal_inertia(moments) -> np.ndarray:
+    """(N, 3, 3) inertia tensors of bodies whose frame is their principal frame.
+
+    Examples
+    --------
+    >>> diagonal_inertia([[1.0, 2.0, 3.0]])[0]
+    array([[1., 0., 0.],
+           [0., 2., 0.],
+           [0., 0., 3.]])
+    """
+    return np.asarray(moments, dtype=float)[:, :, None] * np.eye(3)
 
 
 def _copy(a) -> np.ndarray:
@@ -447,8 +462,6 @@ class RigidBody:
         length_unit : str or astropy unit
             Unit of the vertex coordinates (asteroid models are usually in ``"km"``).
         """
-        from .shape import Polyhedron
-
         mass, com, inertia = Polyhedron.from_obj(path, length_unit=length_unit
                                                  ).mass_properties(density)
         return cls(inertia, mass=mass, center_of_mass=com, name=name)

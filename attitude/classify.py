@@ -23,14 +23,14 @@ import dataclasses
 import json
 import math
 import re
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from astropy import units as u
 from scipy.spatial.transform import Rotation
+from scipy.special import ndtr
 
-from .body import SYMMETRY_RTOL, RigidBody, symmetry_of
+from .body import symmetry_of
 from .diagnostics import (
     DiagnosticsError,
     InsufficientDataError,
@@ -44,8 +44,9 @@ from .diagnostics import (
     reference_axis_for,
 )
 from .ephemeris import Ephemeris
-from .errors import AttitudeError
-from .regimes import PERIOD_KEYS, REGIMES
+from .errors import ClassificationError
+from .lyapunov import LyapunovResult, lyapunov_exponent
+from .regimes import PERIOD_KEYS, REGIMES, Thresholds
 from .state import AttitudeState
 
 __all__ = [
@@ -63,82 +64,7 @@ __all__ = [
 ]
 
 
-class ClassificationError(AttitudeError, ValueError):
-    """Arguments that make a classification impossible (bad thresholds, a chaos test
-    without the torques, ...)."""
 
-
-# ===========================================================================
-# thresholds
-# ===========================================================================
-@dataclass(frozen=True)
-class Thresholds:
-    """Named thresholds of the classification (all documented in docs/diagnostics.md).
-
-    Attributes
-    ----------
-    rest_rate : float
-        ``at-rest`` when ``|omega| <=`` this in every sample of a window, rad/s.
-    symmetry_rtol : float
-        Moments equal within ``symmetry_rtol * C``: ``axisymmetric`` / ``spherical``
-        bodies (default :data:`attitude.body.SYMMETRY_RTOL`, as ``att.diagnose``).
-    principal_axis_angle : float
-        Principal-axis spin (``PA-short``/``PA-long``) when the largest angle between
-        ``L`` and the axis over the osculating nutation cycle is at most this, rad.
-    separatrix : float
-        ``separatrix`` when the separatrix distance ``|m1| = |1 - k^2|`` is at most this
-        (dimensionless; ``m1`` is 0 on the separatrix and +-1 for principal-axis spin), or
-        when ``m1`` changes sign within the window (a crossing).
-    softness : float
-        Width of each boundary for the confidence, as a fraction of its threshold: the
-        margin enters the confidence as ``Phi(margin / width)`` (normal CDF), so a state
-        at the boundary gets 0.5, one a threshold's width inside gets ``Phi(1/softness)``.
-    noise_angle : float
-        Attitude-noise scale, rad: the confidence is multiplied by
-        ``exp(-noise / noise_angle)`` with ``noise`` from
-        :func:`attitude.diagnostics.attitude_noise`.
-    window_cycles : float
-        Default window length in osculating polhode periods (median over the run).
-    window_overlap : float
-        Fraction of a window shared with the next one (step = length * (1 - overlap)).
-    min_window_samples : int
-        Fewest samples in a window (the window is lengthened to hold them).
-    lyapunov_efolds : float
-        ``chaotic`` needs the displaced trajectory to separate by at least this many
-        e-folds more than in the regular control run of the same duration,
-        ``(lambda - lambda_control) * duration >= lyapunov_efolds`` (5: a separation
-        150 times that of the control) ...
-    lyapunov_ratio : float
-        ... and ``lambda`` above this multiple of the control's exponent.
-    """
-
-    rest_rate: float = 1e-12
-    symmetry_rtol: float = SYMMETRY_RTOL
-    principal_axis_angle: float = 1e-2
-    separatrix: float = 1e-4
-    softness: float = 0.25
-    noise_angle: float = 1e-2
-    window_cycles: float = 4.0
-    window_overlap: float = 0.5
-    min_window_samples: int = 16
-    lyapunov_efolds: float = 5.0
-    lyapunov_ratio: float = 2.0
-
-    def __post_init__(self):
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ClassificationError(f"thresholds.{f.name} must be a finite number "
-                                          f">= 0, got {v!r}")
-        if not 0 <= self.window_overlap < 1:
-            raise ClassificationError("thresholds.window_overlap must be in [0, 1), got "
-                                      f"{self.window_overlap!r}")
-        if self.softness <= 0:
-            raise ClassificationError("thresholds.softness must be > 0")
-
-
-# ===========================================================================
-# results
 # ===========================================================================
 @dataclass(frozen=True)
 class Window:
@@ -171,64 +97,6 @@ class Transition:
     after: str
     quantity: str
     threshold: float
-
-
-@dataclass(frozen=True)
-class LyapunovResult:
-    """A finite-time Lyapunov exponent and its regular control.
-
-    Attributes
-    ----------
-    exponent, uncertainty : float
-        ``lambda`` (1/s) and its standard error (batch means of the local exponents).
-    control_exponent, control_uncertainty : float or None
-        The same for the regular control run (default: the same body and state without
-        torques, an integrable motion), same duration and intervals.
-    excess_efolds : float
-        ``(lambda - lambda_control) * duration``: how many e-folds more the displaced
-        trajectory separated than in the control.
-    significance : float
-        ``(lambda - lambda_control) / sqrt(sigma^2 + sigma_control^2)`` (information:
-        the local exponents of a chaotic run are intermittent, so their standard error
-        converges slowly).
-    chaotic : bool
-        ``excess_efolds >= lyapunov_efolds`` and ``lambda > lyapunov_ratio *
-        lambda_control`` (:class:`Thresholds`).
-    duration, interval, separation : float
-        Total time (s), renormalisation interval (s), initial separation (dimensionless
-        phase-space distance, see :func:`lyapunov_exponent`).
-    times, local_exponents : ndarray
-        End of each interval (s) and ``ln(d_k / d_0) / interval`` there (1/s).
-    control_local_exponents : ndarray or None
-    method : str
-        Propagator used (``att.propagate`` ``method=``).
-    """
-
-    exponent: float
-    uncertainty: float
-    control_exponent: float | None
-    control_uncertainty: float | None
-    excess_efolds: float
-    significance: float
-    chaotic: bool
-    duration: float
-    interval: float
-    separation: float
-    method: str
-    times: np.ndarray = field(repr=False)
-    local_exponents: np.ndarray = field(repr=False)
-    control_local_exponents: np.ndarray | None = field(default=None, repr=False)
-    thresholds: Thresholds = field(default_factory=Thresholds, repr=False)
-
-    @property
-    def lyapunov_time(self) -> float:
-        """``1 / lambda`` (s); ``inf`` when ``lambda <= 0``."""
-        return 1.0 / self.exponent if self.exponent > 0 else math.inf
-
-    @property
-    def running_exponent(self) -> np.ndarray:
-        """Finite-time exponent over ``[0, times[k]]`` (1/s), for convergence plots."""
-        return np.cumsum(self.local_exponents) / np.arange(1, self.times.size + 1)
 
 
 @dataclass(frozen=True)
@@ -320,8 +188,6 @@ class Classification:
 # ===========================================================================
 def _phi(x):
     """Standard normal CDF."""
-    from scipy.special import ndtr
-
     return float(ndtr(x))
 
 
@@ -638,7 +504,7 @@ def classify(eph: Ephemeris, *, window=None, body_index: int | None = None,
     lyapunov_options : dict, optional
         Extra keywords for :func:`lyapunov_exponent`.
     require_periods : bool
-        Raise :class:`~attitude.diagnostics.InsufficientDataError` when the periods of
+        Raise :class:`~attitude.errors.InsufficientDataError` when the periods of
         the regime cannot be measured (less than one cycle); otherwise leave them out.
 
     Returns
@@ -766,212 +632,6 @@ def classify(eph: Ephemeris, *, window=None, body_index: int | None = None,
         separatrix_distance=_nanmedian(q["m1"][span_sl]),
         attitude_noise=noise, stationary=stationary,
         span=(float(t[0]), float(t[-1])), lyapunov=lyap, thresholds=th)
-
-
-# ===========================================================================
-# finite-time Lyapunov exponent
-# ===========================================================================
-class _Shifted:
-    """A torque model evaluated at ``t + t0`` (keeps ``velocity_dependent``)."""
-
-    def __init__(self, inner, t0: float):
-        self.inner, self.t0 = inner, float(t0)
-        self.velocity_dependent = getattr(inner, "velocity_dependent", True)
-
-    def __call__(self, t, quaternion, omega_body, body):
-        return self.inner(np.asarray(t, dtype=float) + self.t0, quaternion, omega_body, body)
-
-    def __repr__(self) -> str:
-        return f"{self.inner!r} at t + {self.t0:.9g} s"
-
-
-def _shift_torque(torque, t0: float):
-    """The same torque for a propagation restarted ``t0`` seconds after the epoch."""
-    from . import torques as tq
-    from .orbit import KeplerOrbit
-
-    if t0 == 0.0:
-        return torque
-    if isinstance(torque, tq.SumTorque):
-        return tq.SumTorque(*[_shift_torque(x, t0) for x in torque.terms])
-    if isinstance(torque, (tq.EnergyDissipation, tq.ConstantTorque, tq.HeavyTopPivot)):
-        return torque
-    if isinstance(torque, tq.EddyCurrentDamping) and isinstance(torque.field,
-                                                               tq.UniformField):
-        return torque
-    if isinstance(torque, tq.GravityGradient) and isinstance(torque.orbit, KeplerOrbit):
-        o = torque.orbit
-        M = math.fmod(o.mean_anomaly + o.mean_motion * t0, 2.0 * math.pi)
-        return tq.GravityGradient(torque.mu, dataclasses.replace(o, mean_anomaly=M))
-    return _Shifted(torque, t0)
-
-
-def _batch_means(g: np.ndarray) -> float:
-    """Standard error of the mean of correlated local exponents (batch means)."""
-    n = g.size
-    if n < 2:
-        return math.inf
-    nb = max(2, min(8, n // 4))
-    size = n // nb
-    means = g[: nb * size].reshape(nb, size).mean(axis=1)
-    return float(means.std(ddof=1) / math.sqrt(nb))
-
-
-def _ftle(body, state, torques, duration, intervals, separation, rate_scale, method,
-          rtol, seed):
-    from .propagate import propagate
-
-    tau = duration / intervals
-    rng = np.random.default_rng(seed)
-    v = rng.normal(size=6)
-    v /= np.linalg.norm(v)
-    d0 = separation
-    w_ref = np.asarray(state.omega_body, dtype=float)
-    ws = rate_scale or float(np.linalg.norm(w_ref)) or 1.0
-    R = state.attitude
-    q = R.as_quat()
-    qp = (R * Rotation.from_rotvec(d0 * v[:3])).as_quat()
-    w, wp = w_ref.copy(), w_ref + d0 * v[3:] * ws
-    g = np.empty(intervals)
-    kwargs = {} if rtol is None else {"rtol": rtol}
-    if method is not None:
-        kwargs["method"] = method
-    for k in range(intervals):
-        t0 = k * tau
-        tq_k = [_shift_torque(x, t0) for x in torques] if torques else None
-        s1 = AttitudeState(state.epoch, Rotation.from_quat(q), w, state.frame)
-        s2 = AttitudeState(state.epoch, Rotation.from_quat(qp), wp, state.frame)
-        eph = propagate([body, body], [s1, s2], [tau], torques=tq_k, **kwargs)
-        Q = eph.dataset["quaternion"].values[:, -1]
-        W = eph.dataset["angular_velocity"].values[:, -1]
-        dr = (Rotation.from_quat(Q[0]).inv() * Rotation.from_quat(Q[1])).as_rotvec()
-        dw = (W[1] - W[0]) / ws
-        d = math.sqrt(float(dr @ dr + dw @ dw))
-        if not d > 0:
-            d = d0 * 1e-300
-        g[k] = math.log(d / d0)
-        scale = d0 / d
-        q, w = Q[0], W[0]
-        qp = (Rotation.from_quat(q) * Rotation.from_rotvec(dr * scale)).as_quat()
-        wp = w + dw * scale * ws
-    local = g / tau
-    return local, tau
-
-
-def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence | None,
-                      duration, *, intervals: int = 64, separation: float = 1e-8,
-                      rate_scale: float | None = None, method: str | None = None,
-                      rtol="auto", control="torque-free", seed: int = 0,
-                      thresholds: Thresholds | None = None) -> LyapunovResult:
-    r"""Finite-time maximal Lyapunov exponent of a propagated rotation, with a control.
-
-    Two nearby trajectories (Benettin et al. 1980): the reference from ``state`` and a
-    copy displaced by ``separation`` in the phase-space metric
-
-    .. math::
-        d = \sqrt{|\delta\mathbf r|^2 + |\delta\omega|^2 / \omega_s^2}
-
-    (``delta r`` the rotation vector from the reference attitude to the displaced one,
-    body frame, rad; ``omega_s = rate_scale``, default ``|omega_0|``) are propagated with
-    ``att.propagate`` over ``intervals`` equal intervals; after each, the separation
-    ``d_k`` is recorded and the displacement rescaled back to ``separation`` along its
-    current direction.  ``lambda = sum_k ln(d_k / d_0) / duration``.
-
-    The regular control (same duration and intervals) is, by default, the same body and
-    state without torques (Euler–Poinsot motion is integrable: its finite-time exponent
-    only decays like ``ln(t)/t``); ``control=None`` skips it, or give
-    ``(body, state, torques)`` for another.  Chaotic when the displaced trajectory
-    separated by ``thresholds.lyapunov_efolds`` e-folds more than in the control,
-    ``(lambda - lambda_control) * duration >= lyapunov_efolds``, and
-    ``lambda > thresholds.lyapunov_ratio * lambda_control``.
-
-    Parameters
-    ----------
-    body, state : RigidBody, AttitudeState
-    torques : sequence of torque models or None
-        Time-dependent models are shifted to each interval's start (Keplerian gravity
-        gradient exactly, through the mean anomaly; others through a wrapper).
-    duration : float, Quantity or str
-        Total time, s.
-    intervals : int
-        Renormalisations (choose so that ``lambda * duration / intervals`` stays below
-        ~10: the separation must stay small).
-    separation : float
-        Initial and renormalised separation ``d_0``.
-    rate_scale : float, optional
-        ``omega_s`` of the metric, rad/s.
-    method : str, optional
-        ``att.propagate`` method.  Default: ``"integrator"`` with torques (the restarts
-        favour it: on Hyperion it is several times faster than ``"splitting"`` at
-        ``rtol = 1e-10``), ``"exact"`` without.
-    rtol : float, None or "auto"
-        Relative tolerance of ``method="integrator"``; ``"auto"``: 1e-10 (ample for
-        separations of 1e-8, and several times faster than its default 1e-13); None:
-        propagate's default.
-    control : "torque-free", None or tuple
-        The regular control run: ``"torque-free"`` (default), ``None`` (none), or a
-        ``(body, state, torques)`` tuple.
-    seed : int
-        Seed of the random initial displacement direction.
-
-    Returns
-    -------
-    LyapunovResult
-
-    References
-    ----------
-    .. [1] Benettin, G., Galgani, L., Giorgilli, A. & Strelcyn, J.-M. (1980). Lyapunov
-       characteristic exponents for smooth dynamical systems. *Meccanica* 15, 9-20.
-    .. [2] Wisdom, J., Peale, S. J. & Mignard, F. (1984). The chaotic rotation of
-       Hyperion. *Icarus* 58, 137-152.
-    """
-    th = thresholds or Thresholds()
-    if isinstance(duration, (str, u.Quantity)):
-        duration = u.Quantity(duration, u.s).to_value(u.s)
-    duration = float(duration)
-    if not (duration > 0 and math.isfinite(duration)):
-        raise ClassificationError(f"duration must be > 0 s, got {duration!r}")
-    if int(intervals) < 2:
-        raise ClassificationError(f"intervals must be >= 2, got {intervals!r}")
-    if not 0 < separation < 1e-2:
-        raise ClassificationError(f"separation must be in (0, 1e-2), got {separation!r}")
-    torques = list(torques or [])
-    if method is None:
-        method = "integrator" if torques else "exact"
-    if isinstance(rtol, str):
-        if rtol != "auto":
-            raise ClassificationError(f"rtol must be a number, None or 'auto', got {rtol!r}")
-        rtol = 1e-10 if torques and method == "integrator" else None
-    local, tau = _ftle(body, state, torques, duration, int(intervals), separation,
-                       rate_scale, method, rtol if torques else None, seed)
-    lam = float(local.mean())
-    sig = _batch_means(local)
-    c_local = None
-    lam_c = sig_c = None
-    if control is not None:
-        if control == "torque-free":
-            cb, cs, ct = body, state, []
-        else:
-            cb, cs, ct = control
-            ct = list(ct or [])
-        c_local, _ = _ftle(cb, cs, ct, duration, int(intervals), separation, rate_scale,
-                           None if not ct else method, rtol if ct else None, seed)
-        lam_c = float(c_local.mean())
-        sig_c = _batch_means(c_local)
-    comb = math.hypot(sig, sig_c or 0.0)
-    excess = lam - (lam_c or 0.0)
-    significance = excess / comb if comb > 0 else (math.inf if excess > 0 else 0.0)
-    efolds = excess * duration
-    chaotic = bool(efolds >= th.lyapunov_efolds
-                   and lam > th.lyapunov_ratio * max(lam_c or 0.0, 0.0))
-    used = method
-    return LyapunovResult(
-        exponent=lam, uncertainty=sig, control_exponent=lam_c, control_uncertainty=sig_c,
-        excess_efolds=float(efolds), significance=float(significance), chaotic=chaotic,
-        duration=duration, interval=tau,
-        separation=float(separation), method=used,
-        times=tau * np.arange(1, local.size + 1), local_exponents=local,
-        control_local_exponents=c_local, thresholds=th)
 
 
 # ===========================================================================

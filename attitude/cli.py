@@ -13,10 +13,19 @@ import os
 import sys
 import time
 import tomllib
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from . import __version__
-from .errors import AttitudeError, EphemerisFormatError, PropagationError
+from .classify import classification_json, classify, format_classification
+from .ephemeris import Ephemeris, write_atomically
+from .errors import AttitudeError, PropagationError
+from .formats.aem import convert
+from .formats.spice import convert_to_ck
+from .plot import save_figures
+from .propagation.cluster import local_cluster
+from .scenario import load_scenario, run_scenario
+from .statistics import classify_ensemble, regime_fractions
+from .version import __version__
 
 __all__ = ["main"]
 
@@ -190,7 +199,7 @@ def _summary(result) -> str:
 def _rich_summary(result, console) -> None:
     """The summary as rich tables on ``console`` (a ``rich.console.Console``): the run
     (quantity, value), then the expectations (expected, tolerance, got, ok)."""
-    from rich.table import Table
+    from rich.table import Table  # optional ('attitude[cli]')
     from rich.text import Text
 
     table = Table(title=Text(f"attitude run: {result.scenario.name}"), title_justify="left")
@@ -217,7 +226,7 @@ def _print_summary(result) -> None:
     'attitude[cli]'), else the plain-text summary (pipes, files, no rich)."""
     if sys.stdout.isatty():
         try:
-            from rich.console import Console
+            from rich.console import Console  # optional ('attitude[cli]')
         except ImportError:
             pass
         else:
@@ -233,11 +242,9 @@ def _plot_stem(args, result) -> Path:
 
 
 def _cmd_run(args) -> int:
-    from .scenario import load_scenario, run_scenario
-
     if args.plot:
         try:
-            import matplotlib  # noqa: F401
+            import matplotlib  # noqa: F401  (optional: 'attitude[plot]')
         except ImportError:
             print(f"attitude: error: {args.scenario}: --plot needs matplotlib; install it "
                   "with pip install 'attitude[plot]'", file=sys.stderr)
@@ -251,22 +258,16 @@ def _cmd_run(args) -> int:
             print(f"attitude: error: {args.scenario}: --workers: the scenario has no "
                   "[ensemble] table (a single body runs in one process)", file=sys.stderr)
             return EXIT_INPUT
-        from .ensemble import local_cluster
-
         with local_cluster(args.workers) as client:
             result = run_scenario(scenario, netcdf=args.output, client=client)
     else:
         result = run_scenario(scenario, netcdf=args.output,
                               progress=not args.quiet and sys.stderr.isatty())
     if args.plot:
-        from .plot import save_figures
-
         result.outputs.extend(save_figures(result.ephemeris, _plot_stem(args, result),
                                            result.classification,
                                            regime=result.classification is not None))
     if args.report:
-        from .ephemeris import write_atomically
-
         report = json.dumps(result.report(), indent=2, default=float)
         write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(report + "\n"))
     if not args.quiet:
@@ -314,8 +315,6 @@ def _check_targets(paths) -> tuple[list[Path], list[str]]:
 
 def _check_one(path: str) -> dict:
     """Run one scenario for ``attitude check`` (in a worker process): a plain dict."""
-    from .scenario import load_scenario, run_scenario
-
     start = time.perf_counter()
     out = {"path": path, "status": "ok", "expect": [], "message": ""}
     try:
@@ -371,8 +370,6 @@ def _cmd_check(args) -> int:
         results = map(_check_one, names)
         pool = None
     else:
-        from concurrent.futures import ProcessPoolExecutor
-
         pool = ProcessPoolExecutor(max_workers=min(jobs, len(names)))
         results = pool.map(_check_one, names)
     passed = failed = checked = 0
@@ -426,17 +423,10 @@ and 2.0 are read.  See docs/formats.md.
 
 def _cmd_convert(args) -> int:
     if Path(args.output).suffix.lower() == ".bc":
-        try:
-            from .spice import convert_to_ck
-        except ImportError as exc:
-            raise EphemerisFormatError(f"{args.output}: writing a SPICE CK needs spiceypy "
-                                       f"({exc}); pip install 'attitude[spice]'") from None
         out = convert_to_ck(args.input, args.output, object_id=args.object_id,
                             object_name=args.object_name, body_frame=args.body_frame,
                             frame=args.frame, attitude_type=args.attitude_type)
     else:
-        from .aem import convert
-
         options = {k: v for k, v in (("object_name", args.object_name),
                                      ("object_id", args.object_id),
                                      ("ref_frame_a", args.frame),
@@ -462,9 +452,6 @@ An ensemble file (dims body, time) gets one line per body and the regime fractio
 
 
 def _cmd_classify(args) -> int:
-    from .classify import classification_json, classify, format_classification
-    from .ephemeris import Ephemeris
-
     eph = Ephemeris.from_netcdf(args.ephemeris)
     if eph.is_batch:
         return _classify_batch(eph, args)
@@ -483,8 +470,6 @@ def _classify_batch(eph, args) -> int:
     """An ensemble file: each body classified (``attitude.ensemble.classify_ensemble``),
     one line per body and the regime fractions; bodies that cannot be classified are
     listed with the reason and do not stop the others."""
-    from .ensemble import classify_ensemble, regime_fractions
-
     table = classify_ensemble(eph)
     names = (eph.dataset["body_name"].values if "body_name" in eph.dataset.coords
              else [""] * table.sizes["body"])

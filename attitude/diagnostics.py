@@ -21,7 +21,7 @@ The **3-1-3 Euler angles** of the principal frame relative to that frame,
 *reference axis*: ``C`` (short axis) for short-axis modes and oblate bodies, ``A`` (long
 axis) for long-axis modes and prolate bodies (Samarasinha & A'Hearn 1991; Kaasalainen
 2001).  For ``A`` the frame ``(C, -B, A)`` is used so that it stays right-handed (the
-relabelling of :mod:`attitude.torquefree`).  ``phi`` is the precession angle of the
+relabelling of :mod:`attitude.propagation.torquefree`).  ``phi`` is the precession angle of the
 reference axis about ``L``, ``theta`` the nutation angle between them, ``psi`` the
 rotation angle about the reference axis (D 2-4).
 """
@@ -34,10 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipkm1
 
-from . import _quat
+from . import quaternion as quat
 from .body import SYMMETRY_RTOL, RigidBody
 from .ephemeris import Ephemeris
-from .errors import AttitudeError
+from .errors import DiagnosticsError, InsufficientDataError
 
 __all__ = [
     "DiagnosticsError",
@@ -71,14 +71,6 @@ STENCIL = 6
 #: crossing counts only when the signal goes from below ``-h`` to above ``+h``.
 HYSTERESIS = 0.25
 
-
-class DiagnosticsError(AttitudeError, ValueError):
-    """An ephemeris from which a diagnostic cannot be computed."""
-
-
-class InsufficientDataError(DiagnosticsError):
-    """The ephemeris is too short, too sparse or too coarse for the requested quantity
-    (e.g. it covers less than one polhode period, so no period can be measured)."""
 
 
 # ===========================================================================
@@ -115,7 +107,7 @@ class PrincipalSeries:
     @property
     def momentum_inertial(self) -> np.ndarray:
         """``L`` in inertial components, (T, 3), kg m^2/s."""
-        return _quat.rotate(self.quaternion, self.momentum_body)
+        return quat.rotate(self.quaternion, self.momentum_body)
 
     def slice(self, sl: slice) -> PrincipalSeries:
         return PrincipalSeries(self.time[sl], self.quaternion[sl], self.omega[sl],
@@ -174,8 +166,8 @@ def principal_series(eph: Ephemeris, body_index: int | None = None) -> Principal
                                "duplicate epochs")
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     q_bp = body.body_to_principal.as_quat()                       # body -> principal
-    q_p2i = _quat.multiply(q, _quat.conjugate(q_bp)[None, :])      # principal -> inertial
-    w_p = _quat.rotate(q_bp[None, :], w)
+    q_p2i = quat.multiply(q, quat.conjugate(q_bp)[None, :])      # principal -> inertial
+    w_p = quat.rotate(q_bp[None, :], w)
     return PrincipalSeries(t, q_p2i, w_p, body.principal_moments.copy(), body)
 
 
@@ -294,7 +286,7 @@ def reference_axis_for(moments, dynamic_inertia) -> int:
 
 def _adapted(q_p2i: np.ndarray, omega: np.ndarray, reference_axis: int):
     """Quaternion and rates in the frame whose z axis is the reference axis: identity
-    for C; ``(C, -B, A)`` for A (the LAM relabelling of :mod:`attitude.torquefree`)."""
+    for C; ``(C, -B, A)`` for A (the LAM relabelling of :mod:`attitude.propagation.torquefree`)."""
     if reference_axis == 3:
         return q_p2i, omega
     if reference_axis != 1:
@@ -304,7 +296,7 @@ def _adapted(q_p2i: np.ndarray, omega: np.ndarray, reference_axis: int):
     s = math.sqrt(0.5)
     q_a2p = np.array([s, 0.0, s, 0.0])
     w = np.stack([omega[..., 2], -omega[..., 1], omega[..., 0]], axis=-1)
-    return _quat.multiply(q_p2i, q_a2p), w
+    return quat.multiply(q_p2i, q_a2p), w
 
 
 # ===========================================================================
@@ -326,7 +318,7 @@ def _transport(x_ref: np.ndarray, z_ref: np.ndarray, z: np.ndarray) -> np.ndarra
     return x / np.linalg.norm(x, axis=-1, keepdims=True)
 
 
-def _momentum_frame_x(Lhat: np.ndarray) -> np.ndarray:
+def momentum_frame_x(Lhat: np.ndarray) -> np.ndarray:
     """X axis of the angular-momentum frame for unit ``L`` directions (T, 3) (D 1)."""
     T = Lhat.shape[0]
     X = np.empty_like(Lhat)
@@ -390,13 +382,13 @@ def momentum_frame_angles(series: PrincipalSeries, reference_axis: int = 3
     Ln = np.linalg.norm(Lb, axis=-1)
     rest = Ln == 0
     Lb_safe = np.where(rest[:, None], [0.0, 0.0, 1.0], Lb)
-    Li = _quat.rotate(q, Lb_safe)
+    Li = quat.rotate(q, Lb_safe)
     Z = Li / np.linalg.norm(Li, axis=-1, keepdims=True)
-    X = _momentum_frame_x(Z)
+    X = momentum_frame_x(Z)
     Y = np.cross(Z, X)
-    b0 = _quat.rotate(q, np.array([1.0, 0.0, 0.0]))         # body axes, inertial
-    b1 = _quat.rotate(q, np.array([0.0, 1.0, 0.0]))
-    b2 = _quat.rotate(q, np.array([0.0, 0.0, 1.0]))
+    b0 = quat.rotate(q, np.array([1.0, 0.0, 0.0]))         # body axes, inertial
+    b1 = quat.rotate(q, np.array([0.0, 1.0, 0.0]))
+    b2 = quat.rotate(q, np.array([0.0, 0.0, 1.0]))
 
     def dot(a, b):
         return np.einsum("ij,ij->i", a, b)
@@ -870,7 +862,7 @@ def _diagnose_one(series: PrincipalSeries, reference_axis, periods):
     return ref, per_sample, scalars, measured, note
 
 
-_SCALAR_META = {
+SCALAR_DIAGNOSTICS = {
     "L_rel_drift": ("angular_momentum_magnitude_rel_drift", "1",
                     "largest relative drift of |L| from the first sample"),
     "E_rel_drift": ("energy_rel_drift", "1",
@@ -945,7 +937,7 @@ def add_diagnostics(eph: Ephemeris, *, reference_axis: int | None = None,
         return np.stack(values) if eph.is_batch else values[0]
 
     drop = [v for v in ds.data_vars if v in DIAGNOSTIC_VARIABLES or v.startswith("period_")
-            or v in {m[0] for m in _SCALAR_META.values()}]
+            or v in {m[0] for m in SCALAR_DIAGNOSTICS.values()}]
     ds = ds.drop_vars(drop)
     for name, (units, long_name) in DIAGNOSTIC_VARIABLES.items():
         data = stack([r[1][name] for r in results])
@@ -962,7 +954,7 @@ def add_diagnostics(eph: Ephemeris, *, reference_axis: int | None = None,
     if eph.is_batch:
         ds["reference_axis"] = (("body",), np.array(ref_names), {
             "long_name": "principal axis carried by the third Euler axis"})
-    for key, (name, units, long_name) in _SCALAR_META.items():
+    for key, (name, units, long_name) in SCALAR_DIAGNOSTICS.items():
         ds[name] = (sl, stack([np.float64(r[2][key]) for r in results]),
                     {"units": units, "long_name": long_name})
     keys = sorted({k for r in results for k in r[3]})

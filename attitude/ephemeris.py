@@ -31,9 +31,10 @@ import xarray as xr
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
-from . import _quat
+from . import quaternion as quat
 from .body import RigidBody
 from .errors import EphemerisFormatError
+from .version import __version__
 
 __all__ = ["Ephemeris", "QUATERNION_CONVENTION"]
 
@@ -63,14 +64,12 @@ _LABEL_ATTRS = {
     "body_name": {"long_name": "name of the body"},
 }
 _LABEL_SUFFIX = "_label"
-_CHUNK_TIME = 8192        # samples per chunk along time in the netCDF file
+CHUNK_TIME = 8192        # samples per chunk along time in the netCDF file
 _COMPLEVEL = 4
 _CHUNK_ELEMENTS = 1 << 16  # values per netCDF chunk of a batch (512 KiB of float64)
 
 
 def _version() -> str:
-    from . import __version__
-
     return __version__
 
 
@@ -134,7 +133,7 @@ class Ephemeris:
             Inertial frame label.
         """
         time = np.asarray(time, dtype=float)
-        q = _quat.canonical(np.asarray(quaternion, dtype=float))
+        q = quat.canonical(np.asarray(quaternion, dtype=float))
         w = np.asarray(angular_velocity, dtype=float)
         batch = not isinstance(body, RigidBody)
         inertia, moments, names, single = _body_arrays(body)
@@ -280,11 +279,11 @@ class Ephemeris:
     def to_netcdf(self, path: str | PathLike) -> Path:
         """Write a CF-1.10 netCDF-4 file atomically (temporary file in the same folder,
         then rename): a crash never leaves a truncated ephemeris.  ``time`` is an unlimited
-        dimension; float variables are chunked (:data:`_CHUNK_TIME` samples along time)
+        dimension; float variables are chunked (:data:`CHUNK_TIME` samples along time)
         and zlib-compressed.  Returns the path."""
         path = Path(path)
         ds = self._dataset
-        encoding = _file_encoding(ds)
+        encoding = file_encoding(ds)
         return write_atomically(path, lambda tmp: ds.to_netcdf(
             tmp, engine="netcdf4", format="NETCDF4", encoding=encoding,
             unlimited_dims=("time",)))
@@ -342,7 +341,7 @@ def momentum_and_energy(inertia, q, w):
     inertia = np.asarray(inertia, dtype=float)
     inertia_t = inertia[:, None] if inertia.ndim == 3 else inertia
     Lb = np.einsum("...ij,...j->...i", inertia_t, w)
-    return _quat.rotate(q, Lb), 0.5 * np.sum(w * Lb, axis=-1)
+    return quat.rotate(q, Lb), 0.5 * np.sum(w * Lb, axis=-1)
 
 
 def build_dataset(time, q, w, L, E, *, inertia, moments, names, single, epoch, frame,
@@ -433,10 +432,10 @@ def _as_str(values) -> np.ndarray:
     return np.array([v.decode() if isinstance(v, bytes) else str(v) for v in values])
 
 
-def _file_encoding(ds: xr.Dataset, time_chunk: int | None = None) -> dict:
+def file_encoding(ds: xr.Dataset, time_chunk: int | None = None) -> dict:
     """Chunked, zlib-compressed float variables (no fill value); strings as char arrays.
     ``time_chunk``: samples per chunk along ``time`` (default: the length, at most
-    :data:`_CHUNK_TIME`)."""
+    :data:`CHUNK_TIME`)."""
     encoding = {}
     for name, var in ds.variables.items():
         if var.dtype.kind == "f":
@@ -450,14 +449,14 @@ def _file_encoding(ds: xr.Dataset, time_chunk: int | None = None) -> dict:
 
 
 def _chunks(dims, shape, time_chunk: int | None = None) -> tuple[int, ...]:
-    """netCDF chunk shape: up to :data:`_CHUNK_TIME` samples along ``time``, whole inner
+    """netCDF chunk shape: up to :data:`CHUNK_TIME` samples along ``time``, whole inner
     dimensions, and as many bodies as keep a chunk near :data:`_CHUNK_ELEMENTS` values
     (a catalogue of 1e5 bodies must not become 1e5 chunks per variable)."""
     sizes = {d: n for d, n in zip(dims, shape)}
     out = {}
     for d, n in sizes.items():
         if d == "time":
-            out[d] = time_chunk or max(1, min(n, _CHUNK_TIME))
+            out[d] = time_chunk or max(1, min(n, CHUNK_TIME))
         elif d != "body":
             out[d] = n
     if "body" in sizes:

@@ -8,7 +8,12 @@ best describes it, so callers can catch either (the astropy pattern)::
     except ValueError as err:      # or att.InvalidInertiaError
         print(err)
 
-Messages name the offending value and say what would fix it.
+Messages name the offending value and say what would fix it.  Every error takes one
+shape, ``SomeError(message, key=..., path=...)``: ``key`` names the offending field (a
+scenario key such as ``"torques[0].orbit.e"``, an element ``"e"``, a table column),
+``path`` the file it came from, and ``str(err)`` is the one line
+``"path: key: message"`` (``err.reason`` is the message alone), so that a reader of a
+nested table can re-raise the error under the longer key.
 """
 
 from __future__ import annotations
@@ -21,13 +26,45 @@ __all__ = [
     "ScenarioError",
     "PropagationError",
     "EphemerisFormatError",
+    "OrbitError",
+    "TorqueConfigError",
+    "DiagnosticsError",
+    "InsufficientDataError",
+    "ClassificationError",
+    "MissingDependencyError",
+    "PlotUnavailableError",
     "AttitudeWarning",
     "NearSeparatrixWarning",
+    "InvalidBodiesWarning",
 ]
 
 
 class AttitudeError(Exception):
-    """Base class of every error raised by ``attitude``."""
+    """Base class of every error raised by ``attitude``.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and how to fix it.
+    key : str, optional
+        The offending field (scenario key, element, column), prefixed to the message.
+    path : str, optional
+        The file it came from, prefixed to the key.
+
+    Examples
+    --------
+    >>> err = AttitudeError("must be in [0, 1), got 1.2", key="orbit.e", path="leo.toml")
+    >>> str(err), err.key, err.reason
+    ('leo.toml: orbit.e: must be in [0, 1), got 1.2', 'orbit.e', 'must be in [0, 1), got 1.2')
+    """
+
+    def __init__(self, message: str = "", *, key: str | None = None,
+                 path: str | None = None):
+        self.reason = str(message)
+        self.key = key
+        self.path = None if path is None else str(path)
+        where = ": ".join(p for p in (self.path, key) if p)
+        super().__init__(f"{where}: {self.reason}" if where else self.reason)
 
 
 class InvalidInertiaError(AttitudeError, ValueError):
@@ -49,12 +86,6 @@ class ScenarioError(AttitudeError, ValueError):
     """A malformed or non-physical scenario file.  ``str(err)`` is one line that
     names the file and the key."""
 
-    def __init__(self, message: str, *, path: str | None = None, key: str | None = None):
-        self.path = path
-        self.key = key
-        where = ": ".join(p for p in (path, key) if p)
-        super().__init__(f"{where}: {message}" if where else message)
-
 
 class PropagationError(AttitudeError, RuntimeError):
     """The propagator could not produce an ephemeris (integrator failure, ...)."""
@@ -64,6 +95,40 @@ class EphemerisFormatError(AttitudeError, ValueError):
     """An ephemeris file that does not follow the documented schema or format."""
 
 
+class OrbitError(AttitudeError, ValueError):
+    """Invalid orbital elements or path data; ``key`` names the element (``"e"``,
+    ``"a"``, ...) so that scenario readers can prefix the path of its table."""
+
+
+class TorqueConfigError(AttitudeError, ValueError):
+    """A torque table (or constructor argument) that cannot be used; ``key`` is the key
+    path inside the table (``"orbit.e"``), so that scenario readers can prefix the path of
+    the table itself."""
+
+
+class DiagnosticsError(AttitudeError, ValueError):
+    """An ephemeris from which a diagnostic cannot be computed."""
+
+
+class InsufficientDataError(DiagnosticsError):
+    """The ephemeris is too short, too sparse or too coarse for the requested quantity
+    (e.g. it covers less than one polhode period, so no period can be measured)."""
+
+
+class ClassificationError(AttitudeError, ValueError):
+    """Arguments that make a classification impossible (bad thresholds, a chaos test
+    without the torques, ...)."""
+
+
+class MissingDependencyError(AttitudeError, ImportError):
+    """An optional dependency is not installed; the message names the extra that
+    installs it (``pip install "attitude[spice]"``)."""
+
+
+class PlotUnavailableError(MissingDependencyError):
+    """matplotlib is not installed (``pip install 'attitude[plot]'``)."""
+
+
 class AttitudeWarning(UserWarning):
     """Base class of every warning issued by ``attitude``."""
 
@@ -71,3 +136,7 @@ class AttitudeWarning(UserWarning):
 class NearSeparatrixWarning(AttitudeWarning):
     """The state is so close to the separatrix that periods and the regime are
     ill-conditioned (the motion itself is still computed exactly)."""
+
+
+class InvalidBodiesWarning(AttitudeWarning):
+    """Some rows of an ensemble are not physical; they are propagated as NaN."""

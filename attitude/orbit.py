@@ -41,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from ._units import to_si
-from .errors import AttitudeError
+from .errors import OrbitError
+from .quantities import to_si
 
 __all__ = [
     "KeplerOrbit",
@@ -58,18 +58,6 @@ __all__ = [
 _EPS = np.finfo(float).eps
 _TWO_PI = 2.0 * np.pi
 
-
-class OrbitError(AttitudeError, ValueError):
-    """Invalid orbital elements or path data.
-
-    ``key`` names the offending element (``"e"``, ``"a"``, ...) so that scenario readers
-    can prefix it with the path of the table it came from; ``str(err)`` starts with it.
-    """
-
-    def __init__(self, key: str, message: str):
-        self.key = key
-        self.reason = message
-        super().__init__(f"{key}: {message}")
 
 
 # --- Kepler's equation --------------------------------------------------------------------
@@ -148,8 +136,8 @@ def solve_kepler(M, e, *, max_iter: int = 50):
     e = np.asarray(e, dtype=float)
     if np.any(~np.isfinite(e)) or np.any(e < 0) or np.any(e >= 1):
         bad = e[(~np.isfinite(e)) | (e < 0) | (e >= 1)].ravel()[0] if e.ndim else float(e)
-        raise OrbitError("e", f"must be in [0, 1), got {bad:g} (Kepler's equation for "
-                              "elliptic orbits)")
+        raise OrbitError(f"must be in [0, 1), got {bad:g} (Kepler's equation for "
+                         "elliptic orbits)", key="e")
     if e.ndim == 0 and e == 0.0:
         return M.copy() if M.ndim else float(M)
     if M.ndim == 0 and e.ndim == 0:
@@ -239,13 +227,13 @@ def _si(value, unit: str, key: str):
     try:
         return to_si(value, unit, name=key, error=_Plain)
     except _Plain as exc:
-        raise OrbitError(key, str(exc).removeprefix(f"{key}: ")) from None
+        raise OrbitError(str(exc).removeprefix(f"{key}: "), key=key) from None
 
 
 def _check_angle(value, key: str) -> float:
     x = float(value)
     if not np.isfinite(x):
-        raise OrbitError(key, f"must be a finite angle, got {value!r}")
+        raise OrbitError(f"must be a finite angle, got {value!r}", key=key)
     return x
 
 
@@ -309,16 +297,16 @@ class KeplerOrbit:
     def __post_init__(self):
         mu, a, e = float(self.mu), float(self.a), float(self.e)
         if not (np.isfinite(mu) and mu > 0):
-            raise OrbitError("mu", f"must be a finite, positive gravitational parameter "
-                                   f"(m^3/s^2), got {self.mu!r}")
+            raise OrbitError(f"must be a finite, positive gravitational parameter "
+                             f"(m^3/s^2), got {self.mu!r}", key="mu")
         if not (np.isfinite(a) and a > 0):
-            raise OrbitError("a", f"must be a finite, positive semi-major axis (m), got "
-                                  f"{self.a!r}")
+            raise OrbitError(f"must be a finite, positive semi-major axis (m), got "
+                             f"{self.a!r}", key="a")
         if not (np.isfinite(e) and 0.0 <= e < 1.0):
-            raise OrbitError("e", f"must be in [0, 1), got {self.e!r}"
+            raise OrbitError(f"must be in [0, 1), got {self.e!r}"
                              + ("; hyperbolic and parabolic orbits are not Keplerian "
-                                "ellipses: give the trajectory as a TabulatedPath or a "
-                                "CallablePath" if np.isfinite(e) and e >= 1 else ""))
+                             "ellipses: give the trajectory as a TabulatedPath or a "
+                             "CallablePath" if np.isfinite(e) and e >= 1 else ""), key="e")
         object.__setattr__(self, "mu", mu)
         object.__setattr__(self, "a", a)
         object.__setattr__(self, "e", e)
@@ -479,14 +467,14 @@ class TabulatedPath:
         t = np.asarray(_si(times, "s", "times"), dtype=float)
         r = np.asarray(_si(positions, "m", "positions"), dtype=float)
         if t.ndim != 1 or t.size < 4:
-            raise OrbitError("times", f"expected a 1-D array of at least 4 times, got shape "
-                                      f"{t.shape}")
+            raise OrbitError(f"expected a 1-D array of at least 4 times, got shape "
+                             f"{t.shape}", key="times")
         if r.shape != (t.size, 3):
-            raise OrbitError("positions", f"expected shape ({t.size}, 3), got {r.shape}")
+            raise OrbitError(f"expected shape ({t.size}, 3), got {r.shape}", key="positions")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(r))):
-            raise OrbitError("positions", "times and positions must be finite")
+            raise OrbitError("times and positions must be finite", key="positions")
         if np.any(np.diff(t) <= 0):
-            raise OrbitError("times", "must be strictly increasing")
+            raise OrbitError("must be strictly increasing", key="times")
         self.times = t
         self.extrapolate = bool(extrapolate)
         self._spline = CubicSpline(t, r, axis=0)
@@ -498,9 +486,9 @@ class TabulatedPath:
             lo, hi = self.times[0], self.times[-1]
             if np.any((t < lo) | (t > hi)):
                 bad = t[(t < lo) | (t > hi)].ravel()[0] if t.ndim else float(t)
-                raise OrbitError("t", f"{bad:.9g} s is outside the tabulated span "
-                                      f"[{lo:.9g}, {hi:.9g}] s; extend the table or pass "
-                                      "extrapolate=True")
+                raise OrbitError(f"{bad:.9g} s is outside the tabulated span "
+                                 f"[{lo:.9g}, {hi:.9g}] s; extend the table or pass "
+                                 "extrapolate=True", key="t")
         return t
 
     def position(self, t) -> np.ndarray:
@@ -527,8 +515,8 @@ class CallablePath:
 
     def __init__(self, function: Callable):
         if not callable(function):
-            raise OrbitError("position", f"expected a callable t -> position, got "
-                                         f"{type(function).__name__}")
+            raise OrbitError(f"expected a callable t -> position, got "
+                             f"{type(function).__name__}", key="position")
         self.function = function
         self._vectorised: bool | None = None
 
@@ -547,8 +535,8 @@ class CallablePath:
         flat = t.ravel()
         r = np.array([np.asarray(self.function(float(x)), dtype=float) for x in flat])
         if r.shape != (flat.size, 3):
-            raise OrbitError("position", f"the function must return 3 components per time, "
-                                         f"got shape {r.shape[1:]}")
+            raise OrbitError(f"the function must return 3 components per time, "
+                             f"got shape {r.shape[1:]}", key="position")
         return r.reshape(t.shape + (3,))
 
     def __repr__(self) -> str:
@@ -562,7 +550,7 @@ class ConstantPosition:
     def __init__(self, position):
         r = np.asarray(_si(position, "m", "position"), dtype=float)
         if r.shape != (3,) or not np.all(np.isfinite(r)):
-            raise OrbitError("position", f"expected 3 finite components, got {r!r}")
+            raise OrbitError(f"expected 3 finite components, got {r!r}", key="position")
         self.vector = r
 
     def position(self, t) -> np.ndarray:
@@ -587,6 +575,6 @@ def as_path(obj):
     try:
         return ConstantPosition(obj)
     except (OrbitError, TypeError, ValueError):
-        raise OrbitError("orbit", f"expected a KeplerOrbit, an object with position(t), a "
-                                  f"callable t -> position or a 3-vector, got "
-                                  f"{type(obj).__name__}") from None
+        raise OrbitError(f"expected a KeplerOrbit, an object with position(t), a "
+                         f"callable t -> position or a 3-vector, got "
+                         f"{type(obj).__name__}", key="orbit") from None

@@ -32,7 +32,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import AttitudeError
+from .classify import classify
+from .diagnostics import (
+    momentum_frame_angles,
+    momentum_frame_x,
+    principal_series,
+    reference_axis_for,
+)
+from .errors import AttitudeError, PlotUnavailableError
+from .propagation.torquefree import diagnose_many
+from .quaternion import rotate
+from .statistics import attitude_spread
 
 __all__ = ["PlotUnavailableError", "polhode", "herpolhode", "body_axes", "euler_angles",
            "regime_timeline", "ensemble_regimes", "ensemble_spread", "figures",
@@ -46,14 +56,11 @@ _REGIME_COLOURS = {"PA-short": "tab:blue", "PA-long": "tab:red", "SAM": "tab:cya
 _MAX_POINTS = 4000
 
 
-class PlotUnavailableError(AttitudeError, ImportError):
-    """matplotlib is not installed (``pip install 'attitude[plot]'``)."""
-
 
 def _pyplot_free_figure(**kw):
     """A Figure not registered with pyplot (no GUI, no global state): Agg canvas."""
     try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional ('attitude[plot]')
         from matplotlib.figure import Figure
     except ImportError:
         raise PlotUnavailableError("plots need matplotlib: pip install 'attitude[plot]' "
@@ -64,8 +71,6 @@ def _pyplot_free_figure(**kw):
 
 
 def _series(eph):
-    from .diagnostics import principal_series
-
     if eph.is_batch:
         raise AttitudeError("plots take one body: select it from the batch first")
     return principal_series(eph)
@@ -158,13 +163,10 @@ def polhode(eph):
 def herpolhode(eph):
     """The herpolhode: the tip of the inertial ``omega`` projected on the invariable plane
     (the plane normal to the initial angular momentum)."""
-    from ._quat import rotate
-    from .diagnostics import _momentum_frame_x
-
     series = _series(eph)
     Li = series.momentum_inertial
     Z = Li[0] / np.linalg.norm(Li[0])
-    X = _momentum_frame_x(Z[None, :])[0]
+    X = momentum_frame_x(Z[None, :])[0]
     Y = np.cross(Z, X)
     wi = rotate(series.quaternion, series.omega)
     sl = _thin(series.time.size)
@@ -187,8 +189,6 @@ def herpolhode(eph):
 def body_axes(eph):
     """The principal axes A, B, C (inertial frame) on the unit sphere over time, and the
     direction of the angular momentum."""
-    from ._quat import rotate
-
     series = _series(eph)
     sl = _thin(series.time.size)
     q = series.quaternion[sl]
@@ -220,8 +220,6 @@ def body_axes(eph):
 def euler_angles(eph, reference_axis: int | None = None):
     """Precession ``phi``, nutation ``theta`` and rotation ``psi`` (3-1-3 in the
     angular-momentum frame, degrees) and their rates (deg per time unit) against time."""
-    from .diagnostics import momentum_frame_angles, reference_axis_for
-
     series = _series(eph)
     I, L, E2 = _invariants(series)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -253,8 +251,6 @@ def regime_timeline(eph, classification=None):
     """The regime over time (``classify(eph).segments``; pass ``classification`` to reuse
     one) above the excitation ``L^2 / (2 E B)`` (1 on the separatrix, > 1 SAM, < 1 LAM)."""
     if classification is None:
-        from .classify import classify
-
         classification = classify(eph, require_periods=False)
     series = _series(eph)
     I, L, E2 = _invariants(series)
@@ -290,8 +286,6 @@ def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
     """An ensemble's attitude uncertainty: quantiles over the bodies of the angle from
     the nominal attitude (:func:`attitude.ensemble.spread_quantiles`) against time, and
     the distribution of that angle at the last epoch."""
-    from .ensemble import attitude_spread
-
     spread = attitude_spread(eph, nominal)
     if hasattr(spread.data, "dask"):
         spread = spread.compute()
@@ -320,8 +314,6 @@ def ensemble_regimes(eph):
     """A population at a glance: the torque-free regime of each valid body at the first
     epoch (bar chart of the fractions) and the distribution of the precession and
     rotation periods (log scale)."""
-    from .torquefree import diagnose_many
-
     ds = eph.dataset
     ok = ds["status"].values == 0 if "status" in ds else np.ones(ds.sizes["body"], bool)
     moments = np.asarray(ds["principal_moments"].values, dtype=float)[ok]

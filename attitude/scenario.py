@@ -10,20 +10,40 @@ from __future__ import annotations
 
 import difflib
 import tomllib
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import xarray as xr
 from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
-from ._units import parse_quantity
+from . import statistics
 from .body import MassProperties, RigidBody
-from .errors import AttitudeError, ScenarioError
+from .classify import classify
+from .diagnostics import DIAGNOSTIC_VARIABLES, SCALAR_DIAGNOSTICS, add_diagnostics
+from .ephemeris import Ephemeris, relative_drifts
+from .errors import (
+    AttitudeError,
+    DiagnosticsError,
+    InvalidBodiesWarning,
+    ScenarioError,
+    TorqueConfigError,
+)
+from .population import Ensemble
+from .propagation.batch import STATUS_FAILED, STATUS_OK
+from .propagation.propagator import METHODS, propagate
+from .propagation.torquefree import diagnose
+from .quantities import parse_quantity
 from .regimes import PERIOD_KEYS, REGIMES
+from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
+from .sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
+from .sampling import MODELS
 from .state import AttitudeState, check_frame, direction_frame
+from .torques import from_config
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
            "spin_axis_state", "known_variables", "SCHEMA", "EXPECT_KEYS"]
@@ -209,8 +229,6 @@ def load_scenario(path: str | Path) -> Scenario:
         raise r.fail("propagation.step", f"{duration / step:.3g} epochs is too many for one "
                                          "run; use a longer step")
     method = r.string(prop, "method", "propagation")
-    from .propagate import METHODS
-
     if method is not None and method not in METHODS:
         raise r.fail("propagation.method", f"{method!r} is unknown; choose one of {METHODS}")
     rtol = prop.get("rtol")
@@ -252,12 +270,6 @@ def _ensemble(r: _Reader, doc: dict, folder: Path):
     """The ``[ensemble]`` table: a sampled population (``model``, ``size``, ``seed``,
     ``[ensemble.mean]``, ``[ensemble.sigma]``) or a table of bodies (``table``); the
     epoch and frame come from ``[state]``, which then holds nothing else."""
-    import warnings
-
-    from .ensemble import _DEFAULTS as _ENSEMBLE_DEFAULTS
-    from .ensemble import _DIRECTION as _ENSEMBLE_DIRECTION
-    from .ensemble import MODELS, Ensemble, InvalidBodiesWarning
-
     if "body" in doc:
         raise r.fail("body", "not with [ensemble]: the ensemble defines the bodies")
     table = r.table(doc, "ensemble")
@@ -339,8 +351,6 @@ def _nominal(r: _Reader, ensemble) -> tuple[RigidBody, AttitudeState]:
 
 def _torques(r: _Reader, tables, epoch) -> tuple:
     """Each ``[[torques]]`` table becomes a torque model (see docs/torques.md)."""
-    from .torques import TorqueConfigError, from_config
-
     if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
         raise r.fail("torques", "expected an array of tables [[torques]]")
     models = []
@@ -629,11 +639,6 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
     ``attitude check`` does).  An ensemble scenario runs on ``client`` (a dask client)
     when one is given, else in this process (:func:`ensemble_summary`).
     """
-    from .classify import classify
-    from .diagnostics import DiagnosticsError
-    from .propagate import propagate
-    from .torquefree import diagnose
-
     if scenario.ensemble is not None:
         return _run_ensemble(scenario, netcdf=netcdf, write_outputs=write_outputs,
                              client=client)
@@ -655,8 +660,6 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
     if need == "base":
         dataset = eph.dataset
     elif need is not None:
-        from .diagnostics import add_diagnostics
-
         try:
             dataset = add_diagnostics(eph, periods=need == "periods").dataset
         except (DiagnosticsError, AttitudeError) as exc:
@@ -673,9 +676,6 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
 
 
 def _run_ensemble(scenario: Scenario, *, netcdf, write_outputs: bool, client) -> RunResult:
-    from .propagate import propagate
-    from .torquefree import diagnose
-
     chunks = scenario.chunk if (client is not None or scenario.chunk) else None
     eph = propagate(scenario.ensemble, scenario.times, method=scenario.method,
                     rtol=scenario.rtol, torques=list(scenario.torques),
@@ -686,11 +686,7 @@ def _run_ensemble(scenario: Scenario, *, netcdf, write_outputs: bool, client) ->
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
     if target is not None and write_outputs:
         outputs.append(eph.to_netcdf(target))
-        from .ephemeris import Ephemeris
-
         if client is not None or chunks is not None:   # statistics from the file, lazily
-            import xarray as xr
-
             eph = Ephemeris(xr.open_dataset(outputs[-1], engine="netcdf4",
                                             decode_times=False, chunks={}))
     summary = ensemble_summary(scenario, eph)
@@ -708,26 +704,23 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
     classified per body), the attitude spread from the nominal at the end (sampled
     ensembles; empty for a catalogue), the worst conservation over the valid bodies,
     and the invalid bodies: plain JSON types."""
-    from . import ensemble as en
-    from .ephemeris import relative_drifts
-
     ens = scenario.ensemble
     if scenario.torques:
-        fractions = en.regime_fractions(eph)
+        fractions = statistics.regime_fractions(eph)
         quantiles = {}
     else:
-        diag = en.diagnose_ensemble(ens)
-        fractions = en.regime_fractions(diag)
-        pq = en.period_quantiles(diag, q=[0.05, 0.5, 0.95])
+        diag = statistics.diagnose_ensemble(ens)
+        fractions = statistics.regime_fractions(diag)
+        pq = statistics.period_quantiles(diag, q=[0.05, 0.5, 0.95])
         quantiles = {str(k): {f"{q:g}": float(v) for q, v in zip(pq["quantile"].values,
                                                                   pq.sel(period=k).values)}
                      for k in pq["period"].values}
     ds = eph.dataset
-    ok = ds["status"] == en.STATUS_OK
+    ok = ds["status"] == STATUS_OK
     dL, dE = relative_drifts(ds)
     reductions = [dL.where(ok).max(), dE.where(ok).max()]
     if ens.nominal is not None and ens.valid[ens.nominal]:   # a sampled cloud
-        spread = en.attitude_spread(eph, ens.nominal).isel(time=-1).where(ok)
+        spread = statistics.attitude_spread(eph, ens.nominal).isel(time=-1).where(ok)
         reductions.append(spread.quantile([0.5, 0.9, 0.99], skipna=True))
     dL, dE, *spread_q = _compute(*reductions)
     spread_deg = {f"{q:g}": float(np.degrees(v)) for q, v in zip(
@@ -735,9 +728,9 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
     status = np.asarray(ds["status"].values)
     return {
         "size": int(status.size),
-        "valid": int(np.sum(status == en.STATUS_OK)),
+        "valid": int(np.sum(status == STATUS_OK)),
         "invalid": {str(i): why for i, why in ens.invalid.items()},
-        "failed": [int(i) for i in np.nonzero(status == en.STATUS_FAILED)[0]],
+        "failed": [int(i) for i in np.nonzero(status == STATUS_FAILED)[0]],
         "regime_fractions": fractions,
         "period_quantiles": quantiles,
         "spread_at_end_deg": spread_deg,
@@ -749,7 +742,7 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
 def _compute(*objects):
     """Evaluate xarray objects in one pass (one dask graph when they are lazy)."""
     try:
-        import dask
+        import dask  # optional ('attitude[dask]')
     except ImportError:
         return objects
     return dask.compute(*objects)
@@ -773,11 +766,9 @@ def known_variables() -> dict[str, tuple[str, bool]]:
     figures, ``attitude_noise``, measured periods ``period_<key>`` and their
     ``period_<key>_uncertainty``).
     """
-    from .diagnostics import _SCALAR_META, DIAGNOSTIC_VARIABLES
-
     out = {k: (v, True) for k, v in BASE_VARIABLES.items()}
     out.update({k: (v[0], True) for k, v in DIAGNOSTIC_VARIABLES.items()})
-    out.update({name: (units, False) for name, units, _ in _SCALAR_META.values()})
+    out.update({name: (units, False) for name, units, _ in SCALAR_DIAGNOSTICS.values()})
     for key in PERIOD_KEYS:
         out[f"period_{key}"] = ("s", False)
         out[f"period_{key}_uncertainty"] = ("s", False)

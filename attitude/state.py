@@ -16,9 +16,9 @@ import numpy as np
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
-from ._units import to_si
 from .body import RigidBody
 from .errors import InvalidStateError
+from .quantities import to_si
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
            "direction_frame"]

@@ -50,16 +50,19 @@ Built-in models
 from __future__ import annotations
 
 import difflib
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 
+import erfa
 import numpy as np
 from astropy import units as u
+from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
-from ._units import parse_quantity
 from .body import SYMMETRY_RTOL, RigidBody
-from .errors import AttitudeError
-from .orbit import KeplerOrbit, OrbitError, as_path
+from .errors import OrbitError, TorqueConfigError
+from .orbit import KeplerOrbit, as_path
+from .quantities import parse_quantity
 
 __all__ = [
     "TorqueModel",
@@ -99,19 +102,6 @@ EARTH_ROTATION_RATE = 7.292115e-5
 STANDARD_GRAVITY = 9.80665
 _MU0_OVER_4PI = 1e-7  # T m / A
 
-
-class TorqueConfigError(AttitudeError, ValueError):
-    """A torque table (or constructor argument) that cannot be used.
-
-    ``str(err)`` starts with the key path inside the table (``"orbit.e: must be in [0, 1),
-    got 1.2"``); ``err.key`` holds that path, ``err.reason`` the rest, so that scenario
-    readers can prefix the path of the table itself.
-    """
-
-    def __init__(self, key: str, message: str):
-        self.key = key
-        self.reason = message
-        super().__init__(f"{key}: {message}")
 
 
 # --- small numpy kernels (integrators call models once per stage: keep overhead low) ----
@@ -212,47 +202,47 @@ def _quantity(value, unit: str, key: str, *, shape: tuple | None = ()):
     """A number (SI), a string parsed by astropy, a Quantity, or ``{value, unit}``."""
     target = u.Unit(unit)
     if isinstance(value, bool) or value is None:
-        raise TorqueConfigError(key, f"expected a quantity in {target}, got {value!r}")
+        raise TorqueConfigError(f"expected a quantity in {target}, got {value!r}", key=key)
     if isinstance(value, Mapping):
         _check_keys(value, ("value", "unit"), key)
         if "value" not in value or "unit" not in value:
-            raise TorqueConfigError(key, "a quantity table needs both 'value' and 'unit'")
+            raise TorqueConfigError("a quantity table needs both 'value' and 'unit'", key=key)
         try:
             q = u.Quantity(value["value"], u.Unit(value["unit"]), dtype=float)
         except (ValueError, TypeError) as exc:
-            raise TorqueConfigError(key, f"cannot read {dict(value)!r} as a quantity "
-                                         f"({exc})") from None
+            raise TorqueConfigError(f"cannot read {dict(value)!r} as a quantity "
+                                    f"({exc})", key=key) from None
     elif isinstance(value, str):
         try:
             q = parse_quantity(value)
         except (ValueError, TypeError):
-            raise TorqueConfigError(key, f"cannot parse {value!r} as a quantity; write a "
-                                         f"number and a unit such as '1.5 {target}'") from None
+            raise TorqueConfigError(f"cannot parse {value!r} as a quantity; write a "
+                                    f"number and a unit such as '1.5 {target}'", key=key) from None
     elif isinstance(value, u.Quantity):
         q = value
     else:
         try:
             q = np.asarray(value, dtype=float) * target
         except (ValueError, TypeError):
-            raise TorqueConfigError(key, f"expected a number or a quantity in {target}, "
-                                         f"got {value!r}") from None
+            raise TorqueConfigError(f"expected a number or a quantity in {target}, "
+                                    f"got {value!r}", key=key) from None
     try:
         equiv = u.dimensionless_angles() if target.physical_type != "dimensionless" else []
         out = np.asarray(q.to_value(target, equivalencies=equiv), dtype=float)
     except u.UnitConversionError:
-        raise TorqueConfigError(key, f"unit '{q.unit}' cannot be converted to "
-                                     f"'{target}'") from None
+        raise TorqueConfigError(f"unit '{q.unit}' cannot be converted to "
+                                f"'{target}'", key=key) from None
     if shape is not None and out.shape != shape:
-        raise TorqueConfigError(key, f"expected shape {shape}, got {out.shape}")
+        raise TorqueConfigError(f"expected shape {shape}, got {out.shape}", key=key)
     if not np.all(np.isfinite(out)):
-        raise TorqueConfigError(key, f"every value must be finite, got {out.tolist()}")
+        raise TorqueConfigError(f"every value must be finite, got {out.tolist()}", key=key)
     return float(out) if out.ndim == 0 else out
 
 
 def _positive(value, unit: str, key: str) -> float:
     x = _quantity(value, unit, key)
     if not x > 0:
-        raise TorqueConfigError(key, f"must be positive, got {x!r} {u.Unit(unit)}")
+        raise TorqueConfigError(f"must be positive, got {x!r} {u.Unit(unit)}", key=key)
     return x
 
 
@@ -265,8 +255,8 @@ def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
                 near = difflib.get_close_matches(str(key), list(allowed), n=1)
                 hint = near[0] if near else None
             did = f"did you mean {hint!r}? " if hint else ""
-            raise TorqueConfigError(path, f"unknown key; {did}allowed keys: "
-                                          f"{', '.join(allowed)}")
+            raise TorqueConfigError(f"unknown key; {did}allowed keys: "
+                                    f"{', '.join(allowed)}", key=path)
 
 
 _SYNONYMS = {
@@ -487,14 +477,14 @@ class GravityGradient(TorqueModel):
 
     def __init__(self, mu=None, orbit=None):
         if orbit is None:
-            raise TorqueConfigError("orbit", "a gravity-gradient torque needs the body's "
-                                             "position: give a KeplerOrbit, a path, a "
-                                             "callable or a position vector")
+            raise TorqueConfigError("a gravity-gradient torque needs the body's "
+                                    "position: give a KeplerOrbit, a path, a "
+                                    "callable or a position vector", key="orbit")
         self.orbit = as_path(orbit)
         if mu is None:
             if not isinstance(self.orbit, KeplerOrbit):
-                raise TorqueConfigError("mu", "give the gravitational parameter of the "
-                                              "primary (only a KeplerOrbit carries one)")
+                raise TorqueConfigError("give the gravitational parameter of the "
+                                        "primary (only a KeplerOrbit carries one)", key="mu")
             mu = self.orbit.mu
         self.mu = _positive(mu, "m3/s2", "mu")
 
@@ -548,8 +538,8 @@ class ConstantTorque(TorqueModel):
         if frame not in self.FRAMES:
             near = difflib.get_close_matches(str(frame), self.FRAMES, n=1)
             did = f"did you mean {near[0]!r}? " if near else ""
-            raise TorqueConfigError("frame", f"unknown frame {frame!r}; {did}choose 'body' "
-                                             "or 'inertial'")
+            raise TorqueConfigError(f"unknown frame {frame!r}; {did}choose 'body' "
+                                    "or 'inertial'", key="frame")
         self.frame = frame
 
     def evaluate(self, t, quaternion, omega_body, body):
@@ -840,20 +830,21 @@ class EddyCurrentDamping(TorqueModel):
                                       shape=None), dtype=float)
         if tensor.shape == ():
             if tensor < 0:
-                raise TorqueConfigError("magnetic_tensor", f"must be >= 0, got {tensor}")
+                raise TorqueConfigError(f"must be >= 0, got {tensor}", key="magnetic_tensor")
             self.isotropic = True
         elif tensor.shape == (3, 3):
             scale = np.max(np.abs(tensor))
             if np.any(np.abs(tensor - tensor.T) > 1e-10 * scale):
-                raise TorqueConfigError("magnetic_tensor", "must be symmetric")
+                raise TorqueConfigError("must be symmetric", key="magnetic_tensor")
             tensor = 0.5 * (tensor + tensor.T)
             if np.linalg.eigvalsh(tensor)[0] < -1e-12 * scale:
-                raise TorqueConfigError("magnetic_tensor", "must be positive semi-definite "
-                                        "(a negative eigenvalue would pump energy in)")
+                raise TorqueConfigError("must be positive semi-definite "
+                                        "(a negative eigenvalue would pump energy in)",
+                                        key="magnetic_tensor")
             self.isotropic = False
         else:
-            raise TorqueConfigError("magnetic_tensor", f"expected a scalar or a 3x3 tensor, "
-                                                       f"got shape {tensor.shape}")
+            raise TorqueConfigError(f"expected a scalar or a 3x3 tensor, "
+                                    f"got shape {tensor.shape}", key="magnetic_tensor")
         self.magnetic_tensor = tensor
         if callable(field):
             self.field = field
@@ -930,21 +921,21 @@ class HeavyTopPivot(TorqueModel):
     def __init__(self, mass=None, pivot_to_com=None, g=STANDARD_GRAVITY, up=(0.0, 0.0, 1.0)):
         self.mass = None if mass is None else _positive(mass, "kg", "mass")
         if pivot_to_com is None:
-            raise TorqueConfigError("pivot_to_com", "give the vector from the pivot to the "
-                                                    "centre of mass (body frame, m)")
+            raise TorqueConfigError("give the vector from the pivot to the "
+                                    "centre of mass (body frame, m)", key="pivot_to_com")
         self.pivot_to_com = _quantity(pivot_to_com, "m", "pivot_to_com", shape=(3,))
         self.g = _positive(g, "m/s2", "g")
         up = _quantity(up, "", "up", shape=(3,))
         norm = float(np.linalg.norm(up))
         if norm == 0:
-            raise TorqueConfigError("up", "must be a non-zero vector")
+            raise TorqueConfigError("must be a non-zero vector", key="up")
         self.up = up / norm
 
     def evaluate(self, t, quaternion, omega_body, body):
         mass = self.mass if self.mass is not None else _mass_of(body)
         if mass is None:
-            raise TorqueConfigError("mass", "the body has no mass: give HeavyTopPivot a "
-                                            "mass, or build the body with one")
+            raise TorqueConfigError("the body has no mass: give HeavyTopPivot a "
+                                    "mass, or build the body with one", key="mass")
         up_b = _to_body(quaternion, self.up)
         return np.asarray(mass)[..., None] * self.g * _cross(up_b, self.pivot_to_com)
 
@@ -961,11 +952,11 @@ _ORBIT_KEYS = ("a", "e", "i", "raan", "argp", "mean_anomaly", "epoch")
 
 def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
     if not isinstance(table, Mapping):
-        raise TorqueConfigError(key, "expected a table { a = \"7000 km\", e = 0.0, "
-                                     "i = \"0 deg\", ... }")
+        raise TorqueConfigError("expected a table { a = \"7000 km\", e = 0.0, "
+                                "i = \"0 deg\", ... }", key=key)
     _check_keys(table, _ORBIT_KEYS, key)
     if "a" not in table:
-        raise TorqueConfigError(f"{key}.a", "missing: the semi-major axis is required")
+        raise TorqueConfigError("missing: the semi-major axis is required", key=f"{key}.a")
     elements = {"mu": mu}
     units = {"a": "m", "e": "", "i": "rad", "raan": "rad", "argp": "rad",
              "mean_anomaly": "rad"}
@@ -975,19 +966,17 @@ def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
     try:
         orbit = KeplerOrbit(**elements)
     except OrbitError as err:
-        raise TorqueConfigError(f"{key}.{err.key}", err.reason) from None
+        raise TorqueConfigError(err.reason, key=f"{key}.{err.key}") from None
     if "epoch" in table:
-        from astropy.time import Time
-
         if base_epoch is None:
-            raise TorqueConfigError(f"{key}.epoch", "an orbit epoch needs the scenario epoch "
-                                                    "(from_config(..., base_epoch=...))")
+            raise TorqueConfigError("an orbit epoch needs the scenario epoch "
+                                    "(from_config(..., base_epoch=...))", key=f"{key}.epoch")
         try:
             epoch = (table["epoch"] if isinstance(table["epoch"], Time)
                      else Time(table["epoch"], scale=base_epoch.scale))
         except (ValueError, TypeError) as exc:
-            raise TorqueConfigError(f"{key}.epoch", f"cannot read {table['epoch']!r} as a "
-                                                    f"time ({exc})") from None
+            raise TorqueConfigError(f"cannot read {table['epoch']!r} as a "
+                                    f"time ({exc})", key=f"{key}.epoch") from None
         dt = float((base_epoch - epoch).to_value(u.s))
         orbit = KeplerOrbit(orbit.mu, orbit.a, orbit.e, orbit.i, orbit.raan, orbit.argp,
                             orbit.mean_anomaly + orbit.mean_motion * dt)
@@ -998,10 +987,6 @@ def _earth_rotation_angle(epoch) -> float:
     """Earth rotation angle (IAU 2000) at ``epoch``, with UT1 ~ UTC (|UT1 - UTC| < 0.9 s,
     4e-4 deg; beyond the leap-second table the last TAI - UTC is used, without the
     "dubious year" warning)."""
-    import warnings
-
-    import erfa
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", erfa.ErfaWarning)
         utc = epoch.utc
@@ -1012,8 +997,8 @@ def _gravity_gradient(table, base_epoch):
     _check_keys(table, ("type", "mu", "orbit"), "")
     for key in ("mu", "orbit"):
         if key not in table:
-            raise TorqueConfigError(key, "missing: a gravity_gradient torque needs 'mu' and "
-                                         "'orbit'")
+            raise TorqueConfigError("missing: a gravity_gradient torque needs 'mu' and "
+                                    "'orbit'", key=key)
     mu = _positive(table["mu"], "m3/s2", "mu")
     return GravityGradient(mu, _orbit_from_table(table["orbit"], mu, "orbit", base_epoch))
 
@@ -1021,19 +1006,19 @@ def _gravity_gradient(table, base_epoch):
 def _constant(table, base_epoch):
     _check_keys(table, ("type", "torque", "frame"), "")
     if "torque" not in table:
-        raise TorqueConfigError("torque", "missing: give { value = [x, y, z], unit = "
-                                          "\"N m\" }")
+        raise TorqueConfigError("missing: give { value = [x, y, z], unit = "
+                                "\"N m\" }", key="torque")
     frame = table.get("frame", "body")
     if not isinstance(frame, str):
-        raise TorqueConfigError("frame", f"expected 'body' or 'inertial', got {frame!r}")
+        raise TorqueConfigError(f"expected 'body' or 'inertial', got {frame!r}", key="frame")
     return ConstantTorque(table["torque"], frame=frame)
 
 
 def _dissipation(table, base_epoch):
     _check_keys(table, ("type", "time_constant"), "")
     if "time_constant" not in table:
-        raise TorqueConfigError("time_constant", "missing: give the e-folding time of the "
-                                                 "excess energy, e.g. \"30 min\"")
+        raise TorqueConfigError("missing: give the e-folding time of the "
+                                "excess energy, e.g. \"30 min\"", key="time_constant")
     return EnergyDissipation(table["time_constant"])
 
 
@@ -1047,32 +1032,32 @@ def _prefixed(prefix: str, build: Callable, *args, **kwargs):
     try:
         return build(*args, **kwargs)
     except TorqueConfigError as err:
-        raise TorqueConfigError(f"{prefix}.{err.key}", err.reason) from None
+        raise TorqueConfigError(err.reason, key=f"{prefix}.{err.key}") from None
 
 
 def _field_from_table(table, base_epoch):
     field_table = table.get("field", {"model": "dipole"})
     if not isinstance(field_table, Mapping):
-        raise TorqueConfigError("field", "expected a table { model = \"dipole\", ... } or "
-                                         "{ model = \"uniform\", vector = {...} }")
+        raise TorqueConfigError("expected a table { model = \"dipole\", ... } or "
+                                "{ model = \"uniform\", vector = {...} }", key="field")
     model = field_table.get("model", "dipole")
     if model not in _FIELD_KEYS:
         near = difflib.get_close_matches(str(model), list(_FIELD_KEYS), n=1)
         did = f"did you mean {near[0]!r}? " if near else ""
-        raise TorqueConfigError("field.model", f"unknown field model {model!r}; {did}choose "
-                                               "'dipole' or 'uniform'")
+        raise TorqueConfigError(f"unknown field model {model!r}; {did}choose "
+                                "'dipole' or 'uniform'", key="field.model")
     _check_keys(field_table, _FIELD_KEYS[model], "field")
     if model == "uniform":
         for key in ("orbit", "mu"):
             if key in table:
-                raise TorqueConfigError(key, "not used by a uniform field; remove it")
+                raise TorqueConfigError("not used by a uniform field; remove it", key=key)
         if "vector" not in field_table:
-            raise TorqueConfigError("field.vector", "missing: give { value = [x, y, z], "
-                                                    "unit = \"nT\" }")
+            raise TorqueConfigError("missing: give { value = [x, y, z], "
+                                    "unit = \"nT\" }", key="field.vector")
         return UniformField(_quantity(field_table["vector"], "T", "field.vector", shape=(3,)))
     if "orbit" not in table:
-        raise TorqueConfigError("orbit", "missing: the dipole field is evaluated along the "
-                                         "body's orbit (or use field.model = \"uniform\")")
+        raise TorqueConfigError("missing: the dipole field is evaluated along the "
+                                "body's orbit (or use field.model = \"uniform\")", key="orbit")
     mu = _positive(table.get("mu", EARTH_MU), "m3/s2", "mu")
     orbit = _orbit_from_table(table["orbit"], mu, "orbit", base_epoch)
     kwargs = {k: field_table[k] for k in _FIELD_KEYS["dipole"][1:] if k in field_table}
@@ -1086,23 +1071,23 @@ def _eddy_current(table, base_epoch):
                         "orbit"), "")
     given = [k for k in ("magnetic_tensor", "shell", "sphere") if k in table]
     if len(given) != 1:
-        raise TorqueConfigError(given[1] if len(given) > 1 else "magnetic_tensor",
-                                "give exactly one of 'magnetic_tensor' (S m4), 'shell' "
+        raise TorqueConfigError("give exactly one of 'magnetic_tensor' (S m4), 'shell' "
                                 "{radius, thickness, conductivity} or 'sphere' "
-                                "{radius, conductivity}")
+                                "{radius, conductivity}",
+                                key=given[1] if len(given) > 1 else "magnetic_tensor")
     field = _field_from_table(table, base_epoch)
     kind = given[0]
     if kind == "magnetic_tensor":
         return EddyCurrentDamping(table["magnetic_tensor"], field)
     spec = table[kind]
     if not isinstance(spec, Mapping):
-        raise TorqueConfigError(kind, "expected a table { radius = ..., conductivity = ... }")
+        raise TorqueConfigError("expected a table { radius = ..., conductivity = ... }", key=kind)
     needed = ("radius", "thickness", "conductivity") if kind == "shell" else (
         "radius", "conductivity")
     _check_keys(spec, needed, kind)
     for key in needed:
         if key not in spec:
-            raise TorqueConfigError(f"{kind}.{key}", "missing")
+            raise TorqueConfigError("missing", key=f"{kind}.{key}")
     if kind == "shell":
         return _prefixed(kind, EddyCurrentDamping.spherical_shell, spec["radius"],
                          spec["thickness"], spec["conductivity"], field)
@@ -1113,9 +1098,9 @@ def _eddy_current(table, base_epoch):
 def _heavy_top(table, base_epoch):
     _check_keys(table, ("type", "mass", "pivot_to_com", "g", "up"), "")
     if "pivot_to_com" not in table:
-        raise TorqueConfigError("pivot_to_com", "missing: give the pivot -> centre of mass "
-                                                "vector in the body frame, e.g. { value = "
-                                                "[0, 0, 4], unit = \"cm\" }")
+        raise TorqueConfigError("missing: give the pivot -> centre of mass "
+                                "vector in the body frame, e.g. { value = "
+                                "[0, 0, 4], unit = \"cm\" }", key="pivot_to_com")
     kwargs = {k: table[k] for k in ("mass", "g", "up") if k in table}
     return HeavyTopPivot(pivot_to_com=table["pivot_to_com"], **kwargs)
 
@@ -1185,21 +1170,21 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
     >>> from_config({"type": "gravity_gradient", "mu": 3.986e14, "orbit": {"a": 7e6, "e": 1.2}})
     Traceback (most recent call last):
     ...
-    attitude.torques.TorqueConfigError: orbit.e: must be in [0, 1), got 1.2; ...
+    attitude.errors.TorqueConfigError: orbit.e: must be in [0, 1), got 1.2; ...
     >>> from_config({"type": "disipation", "time_constant": "30 min"})
     Traceback (most recent call last):
     ...
-    attitude.torques.TorqueConfigError: type: unknown torque type 'disipation'; did you mean ...
+    attitude.errors.TorqueConfigError: type: unknown torque type 'disipation'; did you mean ...
     """
     if not isinstance(table, Mapping):
-        raise TorqueConfigError("type", f"expected a table with a 'type' key, got "
-                                        f"{type(table).__name__}")
+        raise TorqueConfigError(f"expected a table with a 'type' key, got "
+                                f"{type(table).__name__}", key="type")
     if "type" not in table:
-        raise TorqueConfigError("type", f"missing; choose one of {', '.join(TORQUE_TYPES)}")
+        raise TorqueConfigError(f"missing; choose one of {', '.join(TORQUE_TYPES)}", key="type")
     kind = table["type"]
     if kind not in TORQUE_TYPES:
         near = difflib.get_close_matches(str(kind), list(TORQUE_TYPES), n=1)
         did = f"did you mean {near[0]!r}? " if near else ""
-        raise TorqueConfigError("type", f"unknown torque type {kind!r}; {did}choose one of "
-                                        f"{', '.join(TORQUE_TYPES)}")
+        raise TorqueConfigError(f"unknown torque type {kind!r}; {did}choose one of "
+                                f"{', '.join(TORQUE_TYPES)}", key="type")
     return TORQUE_TYPES[kind](table, base_epoch)

@@ -1,7 +1,7 @@
 """Accuracy and speed of the integrators with torques (issue 6, section 2).
 
 Prints, for one process on this machine, Markdown tables of wall time and achieved
-accuracy against DOP853 at ``rtol = 1e-13`` (the reference, :mod:`attitude.integrate`):
+accuracy against DOP853 at ``rtol = 1e-13`` (the reference, :mod:`attitude.propagation.reference`):
 
 1. a Hyperion-like moon (``(B - A)/C = 0.265``) tumbling in Saturn's gravity gradient on
    an ``e = 0.1`` orbit, two orbits: Strang, the 4th-order splittings (RKN and S6) and
@@ -40,9 +40,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
-from attitude.integrate import integrate_reference  # noqa: E402
 from attitude.orbit import KeplerOrbit  # noqa: E402
-from attitude.splitting import choose_step, integrate_splitting  # noqa: E402
+from attitude.propagation.reference import integrate_reference  # noqa: E402
+from attitude.propagation.splitting import choose_step, integrate_splitting  # noqa: E402
 from attitude.torques import EARTH_MU, GravityGradient  # noqa: E402
 
 SATURN_MU = 3.7931187e16          # m^3/s^2 (JPL)

@@ -17,8 +17,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.integrate import _rhs
 from attitude.orbit import KeplerOrbit
+from attitude.propagation.reference import _rhs
 from attitude.torques import GravityGradient
 
 TARGET = 1e-6          # rad

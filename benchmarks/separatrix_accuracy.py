@@ -2,8 +2,9 @@
 
 Prints a Markdown table (used in docs/torquefree.md): for states at a given signed
 complementary parameter ``m1 = 1 - k^2`` (SAM side > 0, LAM side < 0), the largest
-attitude error (rad) and relative rate error of :func:`attitude.torquefree.free_rotation`
-over 1, 10 and 50 polhode periods, against the mpmath closed-form oracle of
+attitude error (rad) and relative rate error of
+:func:`attitude.propagation.torquefree.free_rotation` over 1, 10 and 50 polhode periods,
+against the mpmath closed-form oracle of
 ``tests/oracle.py`` (60 digits).  For contrast, the last column is the rate error of
 a *textbook double-precision* implementation (``k^2`` formed from ``L^2`` and ``2E``,
 ``scipy.special.ellipj`` / ``ellipkinc``), the approach of most existing tools.
@@ -28,7 +29,7 @@ from scipy import special as sp
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from attitude.torquefree import free_rotation  # noqa: E402
+from attitude.propagation.torquefree import free_rotation  # noqa: E402
 from tests import oracle as O  # noqa: E402
 
 Q0 = np.array([0.3, -0.5, 0.1, 0.8]) / np.linalg.norm([0.3, -0.5, 0.1, 0.8])

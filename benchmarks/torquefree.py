@@ -2,7 +2,7 @@
 
 Prints, for one process on this machine:
 
-* epochs per second of :func:`attitude.torquefree.free_rotation` for 1 body x 1e6
+* epochs per second of :func:`attitude.propagation.torquefree.free_rotation` for 1 body x 1e6
   epochs and for 1e4 bodies x 100 epochs (target >= 1e6 each);
 * the same work with scipy's DOP853 at ``rtol=1e-12`` (the reference numerical
   propagator: Euler's equations + quaternion kinematics), extrapolated from a measured
@@ -32,7 +32,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
-from attitude.torquefree import branch_of, free_rotation  # noqa: E402
+from attitude.propagation.torquefree import branch_of, free_rotation  # noqa: E402
 
 
 def best_of(fn, repeat=3):

@@ -25,9 +25,9 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude import aem
-from attitude.aem import AEM_WRITE_TYPES, convert, read_aem, write_aem
 from attitude.errors import AttitudeWarning, EphemerisFormatError
+from attitude.formats import aem
+from attitude.formats.aem import AEM_WRITE_TYPES, convert, read_aem, write_aem
 
 DATA = Path(__file__).parent / "data"
 FORMS = {"kvn": ".aem", "xml": ".xml"}

@@ -31,7 +31,7 @@ from attitude.classify import (
 )
 from attitude.diagnostics import InsufficientDataError
 from attitude.orbit import KeplerOrbit
-from attitude.torquefree import diagnose_principal
+from attitude.propagation.torquefree import diagnose_principal
 from attitude.torques import ConstantTorque, EnergyDissipation, GravityGradient
 
 EPOCH = "2030-01-01T00:00:00"
@@ -337,7 +337,7 @@ def test_lyapunov_control_of_a_torque_free_run_is_not_chaotic():
 
 
 def test_classify_numerical_propagators_agree_with_exact():
-    from attitude.propagate import METHODS
+    from attitude.propagation.propagator import METHODS
 
     moments, w, _ = REGIME_CASES[0]
     body = att.RigidBody.from_principal_moments(moments)
@@ -356,10 +356,16 @@ def test_classify_numerical_propagators_agree_with_exact():
 # --- published rotation states (shared/validation/README.md) ------------------------------------
 
 
-def test_apophis_scenario_is_sam_with_published_periods():
+def test_apophis_scenario_is_sam_with_published_periods(tmp_path):
     """(99942) Apophis, Pravec et al. 2014: SAM, P_phi = 27.38 +/- 0.07 h,
-    P_psi = 263 +/- 6 h (scenarios/apophis.nc, written by `attitude run`)."""
-    c = classify(att.Ephemeris.from_netcdf(ROOT / "scenarios" / "apophis.nc"))
+    P_psi = 263 +/- 6 h (scenarios/apophis.toml, written by ``attitude run`` to a file
+    of this test's own, read back)."""
+    from attitude.cli import main
+
+    out = tmp_path / "apophis.nc"
+    assert main(["run", str(ROOT / "scenarios" / "apophis.toml"), "-o", str(out),
+                 "--quiet"]) == 0
+    c = classify(att.Ephemeris.from_netcdf(out))
     assert c.regime == "SAM" and c.confidence > 0.99
     assert c.periods["precession"] / 3600 == pytest.approx(27.38, abs=0.07)
     assert c.periods["rotation"] / 3600 == pytest.approx(263.0, abs=6.0)

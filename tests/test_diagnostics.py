@@ -1,8 +1,8 @@
 """Tests of attitude.diagnostics: measured periods against the analytic ``att.diagnose``
 (Landau & Lifshitz §37 through the exact solution), Euler angles against the exact
-solution's own angles (the Jacobi-function kernel of attitude.torquefree), invariants and
-osculating periods against ``diagnose``, conservation drift under a dissipative torque,
-netCDF round trip of the added variables, and bad input.
+solution's own angles (the Jacobi-function kernel of attitude.propagation.torquefree),
+invariants and osculating periods against ``diagnose``, conservation drift under a
+dissipative torque, netCDF round trip of the added variables, and bad input.
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude import torquefree as tf
 from attitude.diagnostics import (
     DIAGNOSTIC_VARIABLES,
     DiagnosticsError,
@@ -26,6 +25,7 @@ from attitude.diagnostics import (
     osculating_polhode_period,
     principal_series,
 )
+from attitude.propagation import torquefree as tf
 from attitude.torques import EnergyDissipation
 
 EPOCH = "2030-01-01T00:00:00"
@@ -127,7 +127,7 @@ def test_periods_with_attitude_noise_have_honest_uncertainties():
 
 
 def _kernel_angles(moments, w, t):
-    """phi, theta, psi of the exact solution's own kernel (attitude.torquefree)."""
+    """phi, theta, psi of the exact solution's own kernel (attitude.propagation.torquefree)."""
     I = np.asarray(moments, float)[None]
     wv = np.asarray(w, float)[None]
     sI, sw = tf._scales(I, wv)

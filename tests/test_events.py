@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude.errors import AttitudeError, InvalidStateError, PropagationError
-from attitude.events import Event, event_table, nutation_crossing
+from attitude.propagation.events import Event, event_table, nutation_crossing
 
 EPOCH = "2030-01-01"
 
@@ -227,7 +227,7 @@ def test_splitting_chunks_and_rotated_body_frame(monkeypatch):
     boundaries (tiny chunks) agree with one chunk and with DOP853."""
     import importlib
 
-    prop = importlib.import_module("attitude.propagate")
+    prop = importlib.import_module("attitude.propagation.propagator")
 
     turn = Rotation.from_rotvec([0.3, -0.2, 0.5])
     inertia = turn.as_matrix().T @ np.diag([1.0, 1.2, 1.5]) @ turn.as_matrix()

@@ -6,7 +6,7 @@ from scipy.spatial.transform import Rotation
 from scipy.special import ellipk
 
 import attitude as att
-from attitude.integrate import integrate_reference
+from attitude.propagation.reference import integrate_reference
 
 
 def polhode_period(moments, omega):

@@ -57,7 +57,7 @@ def _ensemble():
 @pytest.fixture(params=["single", "batch", "streamed", "ensemble"])
 def ncfile(request, tmp_path):
     if request.param == "streamed":
-        from attitude.streaming import UniformTimes, propagate_to_netcdf
+        from attitude.formats.streaming import UniformTimes, propagate_to_netcdf
 
         eph = _single()
         return propagate_to_netcdf(eph.body, att.AttitudeState(

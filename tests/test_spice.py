@@ -10,7 +10,7 @@ import attitude as att
 sp = pytest.importorskip("spiceypy", reason="spiceypy not installed (optional extra "
                          "'spice': pip install 'attitude[spice]')")
 
-from attitude.spice import (  # noqa: E402
+from attitude.formats.spice import (  # noqa: E402
     TICKS_PER_SECOND,
     leapseconds_kernel_text,
     write_ck,
@@ -138,7 +138,7 @@ def test_errors(eph, tmp_path):
 
 
 def test_several_segments_and_a_tt_ephemeris(tmp_path, monkeypatch):
-    import attitude.spice as spice_mod
+    import attitude.formats.spice as spice_mod
 
     monkeypatch.setattr(spice_mod, "_SEGMENT_RECORDS", 50)
     body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
@@ -170,8 +170,8 @@ def test_several_segments_and_a_tt_ephemeris(tmp_path, monkeypatch):
 
 
 def test_convert_to_ck_from_netcdf_and_aem(eph, tmp_path, monkeypatch):
-    from attitude.aem import write_aem
-    from attitude.spice import convert_to_ck
+    from attitude.formats.aem import write_aem
+    from attitude.formats.spice import convert_to_ck
 
     monkeypatch.chdir(tmp_path)
     nc = eph.to_netcdf(tmp_path / "in.nc")

@@ -11,17 +11,17 @@ from astropy import units as u
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude import splitting
-from attitude.integrate import integrate_reference
 from attitude.orbit import ConstantPosition, KeplerOrbit
-from attitude.splitting import (
+from attitude.propagation import splitting
+from attitude.propagation.reference import integrate_reference
+from attitude.propagation.splitting import (
     SCHEMES,
     STEPS_PER_PERIOD,
     choose_step,
     free_flow,
     integrate_splitting,
 )
-from attitude.torquefree import free_rotation
+from attitude.propagation.torquefree import free_rotation
 from attitude.torques import (
     ConstantTorque,
     EnergyDissipation,
@@ -66,8 +66,8 @@ def _separatrix_distance(moments, omega):
 @pytest.mark.parametrize("h", [1e-3, 0.37, 4.0, -2.5, 60.0])
 def test_free_flow_step_matches_closed_form(h):
     """One step of the kernel (Jacobi addition theorems + Carlson R_J for the precession
-    angle) against the independent closed form of attitude.torquefree, SAM and LAM, short
-    steps and steps spanning many polhode half-periods (|lambda h| >> 2K)."""
+    angle) against the independent closed form of attitude.propagation.torquefree, SAM and
+    LAM, short steps and steps spanning many polhode half-periods (|lambda h| >> 2K)."""
     moments, omega, quat = _random_states(400, 3)
     keep = _separatrix_distance(moments, omega) > 1e-2   # ill-conditioned there (below)
     moments, omega, quat = moments[keep], omega[keep], quat[keep]

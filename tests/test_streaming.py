@@ -9,8 +9,8 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-import attitude.streaming as streaming
-from attitude.streaming import EphemerisWriter, UniformTimes, propagate_to_netcdf
+import attitude.formats.streaming as streaming
+from attitude.formats.streaming import EphemerisWriter, UniformTimes, propagate_to_netcdf
 
 VARIABLES = ("time", "quaternion", "angular_velocity", "angular_momentum", "kinetic_energy")
 
@@ -68,7 +68,7 @@ def test_blocks_are_bounded(case, tmp_path, monkeypatch):
         calls.append(np.array(times))
         return real(body, state, times, **kwargs)
 
-    monkeypatch.setattr(sys.modules["attitude.propagate"], "propagate", spy)
+    monkeypatch.setattr(sys.modules["attitude.formats.streaming"], "propagate", spy)
     path = propagate_to_netcdf(body, state, UniformTimes(0.0, 1.0, 2501), tmp_path / "b.nc",
                                block=1000)
     assert [len(c) for c in calls] == [1000, 1000, 501]
@@ -87,7 +87,7 @@ def test_crash_in_the_middle_leaves_no_file(case, tmp_path, monkeypatch):
             raise RuntimeError("simulated crash")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(sys.modules["attitude.propagate"], "propagate", failing)
+    monkeypatch.setattr(sys.modules["attitude.formats.streaming"], "propagate", failing)
     with pytest.raises(RuntimeError, match="simulated crash"):
         propagate_to_netcdf(body, state, np.arange(500.0), tmp_path / "c.nc", block=100)
     assert list(tmp_path.iterdir()) == []

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from attitude.errors import InvalidInertiaError, InvalidStateError
-from attitude.torquefree import (
+from attitude.propagation.torquefree import (
     PURE_SPIN_TOL,
     RTOL_AXISYMMETRIC,
     SEPARATRIX_M1_TOL,

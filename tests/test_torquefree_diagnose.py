@@ -21,8 +21,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from attitude.errors import NearSeparatrixWarning
+from attitude.propagation.torquefree import diagnose, diagnose_principal, free_rotation
 from attitude.regimes import PERIOD_KEYS, REGIMES
-from attitude.torquefree import diagnose, diagnose_principal, free_rotation
 
 from . import oracle as O
 

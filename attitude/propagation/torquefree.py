@@ -31,13 +31,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special as sp
 
-from . import _elliptic as el
-from ._quat import rotate
-from .errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
-from .regimes import PERIOD_KEYS, REGIMES
+from .. import quaternion as quat
+from ..body import SYMMETRY_RTOL
+from ..errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
+from ..regimes import PERIOD_KEYS, REGIMES
+from . import elliptic as el
 
 __all__ = [
     "free_rotation",
+    "exact_arrays",
     "Diagnosis",
     "diagnose",
     "diagnose_principal",
@@ -540,7 +542,7 @@ def _precession_setup(I, w, q0):
     w_par = es * ws[:, None]
     w_perp = w - w_par
     e_x_wp = np.cross(es, w_perp)
-    Lin = rotate(q0, Lb)
+    Lin = quat.rotate(q0, Lb)
     Lf = L.astype(np.float64)
     with np.errstate(invalid="ignore", divide="ignore"):
         Lhat = np.where(Lf[:, None] > 0, Lin / np.where(Lf > 0, Lf, 1.0)[:, None], 0.0)
@@ -690,6 +692,17 @@ def free_rotation(moments, omega0, quat0, t):
             c["QL"] = _qmul(qg_t, _qconj(E0))
         _run_group(ev, c, idx, tt, sw, out_q, out_w)
     return out_q.reshape(batch + (T, 4)), out_w.reshape(batch + (T, 3))
+
+
+def exact_arrays(moments, b2p, q0, w0, t):
+    """Torque-free closed form of N bodies given principal moments (N, 3), body ->
+    principal quaternions (N, 4), attitudes (N, 4) and body rates (N, 3): ``q (N, T, 4),
+    w (N, T, 3)`` in the body frames."""
+    q_pb = quat.conjugate(b2p)
+    w0p = quat.rotate(b2p, w0)
+    q0p = quat.multiply(q0, q_pb)                                      # principal -> inertial
+    qp, wp = free_rotation(moments, w0p, q0p, t)                        # (N, T, 4), (N, T, 3)
+    return quat.multiply(qp, b2p[:, None, :]), quat.rotate(q_pb[:, None, :], wp)
 
 
 def _run_group(ev, c, idx, tt, sw, out_q, out_w):
@@ -865,10 +878,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
     and for LAM the same with A and C exchanged (docs/torquefree.md, TF 31-33).
     """
     if rtol_symmetry is None:
-        try:
-            from .body import SYMMETRY_RTOL as rtol_symmetry
-        except ImportError:  # pragma: no cover - body module absent
-            rtol_symmetry = 1e-12
+        rtol_symmetry = SYMMETRY_RTOL
     rtol_symmetry = max(float(rtol_symmetry), RTOL_AXISYMMETRIC)  # never finer than the solver
     rtol_spin = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
     _, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
@@ -883,7 +893,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
     Lin = None
     if quat0 is not None:
         q = np.asarray(quat0, dtype=float)
-        Lin = rotate(q / np.linalg.norm(q), Lp)
+        Lin = quat.rotate(q / np.linalg.norm(q), Lp)
     base = dict(angular_momentum=L, kinetic_energy=E, omega_principal=wv,
                 angular_momentum_principal=Lp, angular_momentum_inertial=Lin)
     if L == 0.0:
@@ -1060,7 +1070,7 @@ def diagnose_many(moments, omega0, *, rtol_symmetry=None, rtol_spin=None) -> dic
     ['SAM', 'PA-short']
     """
     if rtol_symmetry is None:
-        from .body import SYMMETRY_RTOL as rtol_symmetry
+        rtol_symmetry = SYMMETRY_RTOL
     rtol_symmetry = max(float(rtol_symmetry), RTOL_AXISYMMETRIC)
     rtol_spin_ = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
     moments = np.atleast_2d(np.asarray(moments, dtype=float))

@@ -13,7 +13,7 @@ Examples
 --------
 >>> import numpy as np, attitude as att, tempfile, pathlib
 >>> from scipy.spatial.transform import Rotation
->>> from attitude.streaming import UniformTimes, propagate_to_netcdf
+>>> from attitude.formats.streaming import UniformTimes, propagate_to_netcdf
 >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
 >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.02, 0.3])
 >>> out = pathlib.Path(tempfile.mkdtemp()) / "long.nc"
@@ -33,13 +33,14 @@ import netCDF4
 import numpy as np
 from astropy.time import Time
 
-from .body import RigidBody
-from .ephemeris import (
-    _CHUNK_TIME,
+from ..body import RigidBody
+from ..ephemeris import (
+    CHUNK_TIME,
     Ephemeris,
-    _file_encoding,
+    file_encoding,
 )
-from .errors import EphemerisFormatError
+from ..errors import EphemerisFormatError
+from ..propagation.propagator import propagate
 
 __all__ = ["EphemerisWriter", "UniformTimes", "propagate_to_netcdf"]
 
@@ -86,7 +87,7 @@ class EphemerisWriter:
 
     def __init__(self, path: str | PathLike, *, body: RigidBody, epoch: Time,
                  frame: str = "ICRF", title: str = "attitude ephemeris", source: str = "",
-                 extra_attrs: dict | None = None, chunk: int = _CHUNK_TIME):
+                 extra_attrs: dict | None = None, chunk: int = CHUNK_TIME):
         if not isinstance(body, RigidBody):
             raise TypeError("EphemerisWriter writes a single-body ephemeris: body must be a "
                             "RigidBody")
@@ -115,7 +116,7 @@ class EphemerisWriter:
         os.close(fd)
         try:
             ds.to_netcdf(self._tmp, engine="netcdf4", format="NETCDF4",
-                         encoding=_file_encoding(ds, time_chunk=self.chunk),
+                         encoding=file_encoding(ds, time_chunk=self.chunk),
                          unlimited_dims=("time",))
             self._nc = netCDF4.Dataset(self._tmp, "a")
             self._nc.set_auto_maskandscale(False)
@@ -206,7 +207,7 @@ class EphemerisWriter:
 
 def propagate_to_netcdf(body: RigidBody, state, times, path: str | PathLike, *,
                         block: int = 100_000, title: str | None = None,
-                        source: str | None = None, chunk: int = _CHUNK_TIME) -> Path:
+                        source: str | None = None, chunk: int = CHUNK_TIME) -> Path:
     """Propagate with the exact torque-free solution and stream the ephemeris to ``path``.
 
     ``times`` (seconds since ``state.epoch``) is anything with ``len()`` and slicing: a
@@ -215,8 +216,6 @@ def propagate_to_netcdf(body: RigidBody, state, times, path: str | PathLike, *,
     memory).  :func:`attitude.propagate` is called on ``block`` samples at a time and each
     block is appended; the file appears at ``path`` only when complete.
     """
-    from .propagate import propagate
-
     if not isinstance(body, RigidBody):
         raise TypeError("propagate_to_netcdf streams a single body: body must be a RigidBody")
     block = int(block)

@@ -71,8 +71,10 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import special as sp
 
-from .body import RigidBody
-from .errors import InvalidStateError
+from ..body import RigidBody
+from ..errors import InvalidStateError
+from ..orbit import KeplerOrbit
+from ..torques import EddyCurrentDamping, EnergyDissipation, GravityGradient
 
 __all__ = [
     "integrate_splitting",
@@ -82,6 +84,7 @@ __all__ = [
     "DEFAULT_SCHEME",
     "STEPS_PER_PERIOD",
     "BodyBatch",
+    "step_count",
 ]
 
 _EPS = float(np.finfo(float).eps)
@@ -434,9 +437,9 @@ def free_flow(moments, quat, omega, h):
     (S5) Spherical bodies, pure principal-axis spins (transverse L below 1e-100
     relative) and bodies at rest rotate uniformly about ``omega``.
 
-    Accuracy: a few ulp per step (tested against :func:`attitude.torquefree.free_rotation`
-    in ``tests/test_splitting.py``); near the separatrix the motion itself is
-    ill-conditioned and ``scipy.special.ellipj`` loses ~``eps / m1`` relative.
+    Accuracy: a few ulp per step (tested against
+    :func:`attitude.propagation.torquefree.free_rotation` in ``tests/test_splitting.py``);
+    near the separatrix the motion itself is ill-conditioned and ``scipy.special.ellipj`` loses ~``eps / m1`` relative.
     """
     moments = np.asarray(moments, dtype=float)
     quat = np.asarray(quat, dtype=float)
@@ -710,8 +713,6 @@ STEPS_PER_PERIOD = {2: 1000, 4: 300, 6: 200}
 
 def _orbit_rate(path) -> float:
     """Largest angular rate of the body's position about the primary, rad/s."""
-    from .orbit import KeplerOrbit
-
     if isinstance(path, KeplerOrbit):
         e = path.e
         return path.mean_motion * (1.0 + e) ** 2 / (1.0 - e * e) ** 1.5
@@ -727,8 +728,6 @@ def _orbit_rate(path) -> float:
 
 
 def _min_radius(path) -> float:
-    from .orbit import KeplerOrbit
-
     if isinstance(path, KeplerOrbit):
         return path.periapsis
     return float(np.linalg.norm(np.asarray(path.position(0.0), dtype=float)))
@@ -736,8 +735,6 @@ def _min_radius(path) -> float:
 
 def _model_rates(model, system: _System, q_p, w_p) -> np.ndarray:
     """Rates (rad/s, per body) on which a torque model changes the motion."""
-    from .torques import EddyCurrentDamping, EnergyDissipation, GravityGradient
-
     n = system.n
     if isinstance(model, GravityGradient):
         r = _min_radius(model.orbit)
@@ -829,7 +826,7 @@ class _Progress:
         if not enabled:
             return
         try:
-            from tqdm.auto import tqdm
+            from tqdm.auto import tqdm  # optional (a progress bar when installed)
         except ImportError:
             return
         self.bar = tqdm(total=self.total, unit="step", desc="splitting", leave=False)
@@ -992,7 +989,14 @@ def _n_free(ops: tuple, steps: int) -> int:
     return steps * per - (steps - 1 if joint and steps else 0)
 
 
-def _count(dt: float, h_max: float) -> int:
+def step_count(dt: float, h_max: float) -> int:
+    """Number of equal steps no longer than ``h_max`` that cover ``dt``.
+
+    Examples
+    --------
+    >>> step_count(10.0, 3.0), step_count(9.0, 3.0), step_count(0.0, 3.0)
+    (4, 3, 0)
+    """
     if dt == 0.0:
         return 0
     if not math.isfinite(h_max):
@@ -1055,7 +1059,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     Examples
     --------
     >>> import numpy as np
-    >>> from attitude.splitting import integrate_splitting
+    >>> from attitude.propagation.splitting import integrate_splitting
     >>> from attitude.torques import GravityGradient
     >>> gg = GravityGradient(3.986004418e14, [7.0e6, 0.0, 0.0])
     >>> q, w = integrate_splitting([1.0, 2.0, 3.0], [0, 0, 0, 1], [1e-3, 2e-3, 3e-3],
@@ -1115,7 +1119,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     for idx in _segments(t):
         prev, counts = 0.0, []
         for j in idx:
-            counts.append(_count(t[j] - prev, h_max))
+            counts.append(step_count(t[j] - prev, h_max))
             prev = t[j]
         plan.append((idx, counts))
         total += sum(_n_free(ops_step, c) for c in counts)

@@ -70,11 +70,11 @@ import numpy as np
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
-from . import _quat
-from .body import RigidBody
-from .ephemeris import Ephemeris, write_atomically
-from .errors import AttitudeWarning, EphemerisFormatError
-from .state import INERTIAL_FRAMES
+from .. import quaternion as quat
+from ..body import RigidBody
+from ..ephemeris import Ephemeris, write_atomically
+from ..errors import AttitudeWarning, EphemerisFormatError
+from ..state import INERTIAL_FRAMES
 
 __all__ = [
     "read_aem",
@@ -825,7 +825,7 @@ def _rotation_and_rates(seg: _Segment, where: str) -> tuple[np.ndarray, np.ndarr
         if kind == "QUATERNION/DERIVATIVE":
             qdot = np.stack([col[k] for k in _QDOT], axis=1)
             # q_dot = q (x) (omega_E, 0) / 2  =>  omega_E = 2 vec(conj(q) (x) q_dot)
-            w = 2.0 * _quat.multiply(_quat.conjugate(q), qdot)[:, :3]
+            w = 2.0 * quat.multiply(quat.conjugate(q), qdot)[:, :3]
     elif kind.startswith("EULER"):
         angles = np.stack([col[k] for k in _ANG], axis=1)
         rot = Rotation.from_euler(spec.euler_seq, angles, degrees=True)
@@ -945,7 +945,7 @@ def read_aem(path: str | PathLike, *, body: RigidBody | None = None,
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from attitude.aem import read_aem
+    >>> from attitude.formats.aem import read_aem
     >>> text = '''CCSDS_AEM_VERS = 2.0
     ... CREATION_DATE = 2024-01-01T00:00:00
     ... ORIGINATOR = EXAMPLE
@@ -1231,7 +1231,7 @@ def _state_values(kind: str, q: np.ndarray, w: np.ndarray, seq: str | None,
     if kind.startswith("QUATERNION"):
         parts.append(q)
         if kind == "QUATERNION/DERIVATIVE":
-            parts.append(0.5 * _quat.multiply(q, np.concatenate([w, np.zeros((len(w), 1))],
+            parts.append(0.5 * quat.multiply(q, np.concatenate([w, np.zeros((len(w), 1))],
                                                                axis=1)))
     else:
         with warnings.catch_warnings():
@@ -1313,7 +1313,7 @@ def write_aem(ephemeris: Ephemeris, path: str | PathLike, *, form: str | None = 
     >>> import numpy as np, tempfile, pathlib
     >>> import attitude as att
     >>> from astropy.time import Time
-    >>> from attitude.aem import write_aem, read_aem
+    >>> from attitude.formats.aem import write_aem, read_aem
     >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
     >>> q = [[0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)]]      # body x along inertial y
     >>> w = [[0.0, 0.0, np.radians(1.0)]]                  # 1 deg/s about body z

@@ -1,9 +1,11 @@
 """``propagate``: one entry point for every propagator.
 
-Without torques the exact Euler–Poinsot solution is used (:mod:`attitude.torquefree`);
-with torques the splitting integrator (:mod:`attitude.splitting`: exact free flow and
-torque kicks, 4th order by default), or, with ``method="integrator"`` (or an ``rtol``),
-the DOP853 reference integrator (:mod:`attitude.integrate`).
+Without torques the exact Euler–Poinsot solution is used
+(:mod:`attitude.propagation.torquefree`); with torques the splitting integrator
+(:mod:`attitude.propagation.splitting`: exact free flow and torque kicks, 4th order by
+default), or, with ``method="integrator"`` (or an ``rtol``), the DOP853 reference
+integrator (:mod:`attitude.propagation.reference`); populations run in chunks, locally
+or on dask (:mod:`attitude.propagation.batch`).
 """
 
 from __future__ import annotations
@@ -14,14 +16,17 @@ import numpy as np
 from astropy import units as u
 from astropy.time import Time
 
-from . import _quat
-from .body import RigidBody
-from .ensemble import Ensemble, check_batch
-from .ephemeris import Ephemeris
-from .errors import InvalidStateError
+from .. import quaternion as quat
+from ..body import RigidBody
+from ..ephemeris import Ephemeris
+from ..errors import InvalidStateError
+from ..population import Ensemble, check_batch
+from ..state import AttitudeState
+from .batch import propagate_ensemble
 from .events import as_events, locate, name_of
-from .integrate import integrate_reference_batch, integrate_reference_events
-from .state import AttitudeState
+from .reference import integrate_reference_batch, integrate_reference_events
+from .splitting import choose_step, integrate_splitting, step_count
+from .torquefree import exact_arrays
 
 __all__ = ["propagate", "METHODS", "elapsed_seconds"]
 
@@ -90,8 +95,9 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         (:mod:`attitude.torques`).
     method : {"exact", "splitting", "integrator"}, optional
         ``"exact"``: the closed-form torque-free solution.  ``"splitting"``: the exact
-        free flow composed with torque kicks (:func:`attitude.splitting.integrate_splitting`;
-        symplectic for attitude-only torques, a whole batch in one vectorised run).
+        free flow composed with torque kicks
+        (:func:`attitude.propagation.splitting.integrate_splitting`; symplectic for
+        attitude-only torques, a whole batch in one vectorised run).
         ``"integrator"``: DOP853 on Euler's equations (the reference; one body at a
         time).  Default: ``"exact"`` without torques; with torques ``"splitting"``,
         or ``"integrator"`` if ``rtol`` is given.
@@ -99,7 +105,7 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         Relative tolerance of the ``"integrator"`` method (default 1e-13).
     step : float (s) or time Quantity, optional
         Longest step of the ``"splitting"`` method; default
-        :func:`attitude.splitting.choose_step` (a fixed fraction of the fastest time
+        :func:`attitude.propagation.splitting.choose_step` (a fixed fraction of the fastest time
         scale: spin, libration, orbit, damping).  Output times are always hit exactly.
     order : {2, 4, 6}, optional
         Order of the ``"splitting"`` method (default 4).
@@ -108,11 +114,11 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
 
     events : callable or sequence of callables, optional
         Events ``g(t, quaternion, omega_body, body) -> float`` with optional attributes
-        ``terminal`` and ``direction`` like scipy's (:class:`attitude.events.Event`,
-        :func:`attitude.events.nutation_crossing`).  Crossings are located to ~1e-12
+        ``terminal`` and ``direction`` like scipy's (:class:`attitude.propagation.events.Event`,
+        :func:`attitude.propagation.events.nutation_crossing`).  Crossings are located to ~1e-12
         relative in time on the method's own solution and recorded in the ephemeris
         (``event_time``, ``event_name``, ``event_quaternion``,
-        ``event_angular_velocity``; :func:`attitude.events.event_table`); a terminal
+        ``event_angular_velocity``; :func:`attitude.propagation.events.event_table`); a terminal
         event ends the ephemeris, its last sample being the event; in a batch each
         body stops at its own event (its later samples are NaN).  Times must be >= 0.
 
@@ -188,8 +194,6 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     elif method == "exact":
         q, w = _exact(bodies, q0, w0, t)
     elif method == "splitting":
-        from .splitting import integrate_splitting
-
         q, w = integrate_splitting(bodies, q0, w0, t, torques=torques, step=step,
                                    order=4 if order is None else order, progress=progress)
     else:
@@ -227,8 +231,6 @@ def _choose_method(method, torques, rtol, step, order) -> str:
 
 def _propagate_ensemble(ensemble, times, *, torques, method, rtol, step, order, progress,
                         events, client, chunks) -> Ephemeris:
-    from .ensemble import propagate_ensemble
-
     if events:
         raise InvalidStateError("events: not available for an ensemble or with client=/"
                                 "chunks=; propagate the bodies of interest one by one")
@@ -260,7 +262,7 @@ def _record_events(eph: Ephemeris, records: list, events: list, batch: bool) -> 
             "comment": "seconds since the epoch global attribute"})
         ds["event_name"] = ("event", np.array([name_of(events[r[1]]) for r, _ in rows]),
                             {"long_name": "name of the event"})
-        ds["event_quaternion"] = (("event", "quaternion_component"), _quat.canonical(
+        ds["event_quaternion"] = (("event", "quaternion_component"), quat.canonical(
             np.stack([r[2] for r, _ in rows])), {
             "long_name": "attitude quaternion at the event", "units": "1"})
         ds["event_angular_velocity"] = (("event", "axis"), np.stack([r[3] for r, _ in rows]),
@@ -274,12 +276,10 @@ def _record_events(eph: Ephemeris, records: list, events: list, batch: bool) -> 
 
 def _grid(t: np.ndarray, h: float) -> np.ndarray:
     """0, the output times and equal steps no longer than ``h`` between them."""
-    from .splitting import _count
-
     knots = np.unique(np.concatenate([[0.0], t]))
     parts = [knots[:1]]
     for a, b in zip(knots[:-1], knots[1:]):
-        n = _count(b - a, h)
+        n = step_count(b - a, h)
         parts.append(np.linspace(a, b, n + 1)[1:])
     return np.concatenate(parts)
 
@@ -313,8 +313,6 @@ def _with_events(method, bodies, q0, w0, t, events, torques, step, order, rtol, 
                 qx, wx = _exact([bodies[i]], q0[i:i + 1], w0[i:i + 1], np.array([x]))
                 return qx[0, 0], wx[0, 0]
         else:
-            from .splitting import choose_step
-
             order = 4 if order is None else order
             h = step if step is not None else choose_step(bodies, q0, w0, torques,
                                                           order=order)
@@ -340,8 +338,6 @@ _EVENT_CHUNK = 4096
 def _splitting_events(bodies, q0, w0, t, grid, events, torques, hs, order, progress):
     """Splitting with events: the step grid in chunks, crossings located on each chunk
     by ``brentq`` over a partial step from the step's start."""
-    from .splitting import integrate_splitting
-
     n, m = len(bodies), grid.size
     qg, wg = np.full((n, m, 4), np.nan), np.full((n, m, 3), np.nan)
     qg[:, 0], wg[:, 0] = q0, w0
@@ -427,8 +423,6 @@ def _step_seconds(step) -> float:
 
 def _exact(bodies: list[RigidBody], q0: np.ndarray, w0: np.ndarray, t: np.ndarray):
     """Torque-free closed form, in principal frames, mapped back to body frames."""
-    from .ensemble import exact_arrays
-
     q_bp = np.stack([b.body_to_principal.as_quat() for b in bodies])  # body -> principal
     moments = np.stack([b.principal_moments for b in bodies])
     return exact_arrays(moments, q_bp, q0, w0, t)

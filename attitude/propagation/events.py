@@ -27,9 +27,10 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+from astropy import units as u
 from scipy.optimize import brentq
 
-from .errors import InvalidStateError, PropagationError
+from ..errors import InvalidStateError, PropagationError
 
 __all__ = ["Event", "nutation_crossing", "event_table"]
 
@@ -89,8 +90,6 @@ def nutation_crossing(angle, axis="C", *, terminal: bool = True, direction: int 
     axis : {"A", "B", "C", 0, 1, 2}
     terminal, direction : see :class:`Event`
     """
-    from astropy import units as u
-
     try:
         if isinstance(angle, u.Quantity):
             angle = angle.to_value(u.rad)
@@ -140,7 +139,7 @@ def event_table(ephemeris) -> list[tuple]:
 def _check(event, where: str) -> None:
     if not callable(event):
         raise InvalidStateError(f"{where}: expected a callable g(t, quaternion, "
-                                f"omega_body, body) or an attitude.events.Event, got "
+                                f"omega_body, body) or an attitude.propagation.events.Event, got "
                                 f"{type(event).__name__}")
     direction = getattr(event, "direction", 0)
     if direction not in (-1, 0, 1):

@@ -1,0 +1,75 @@
+"""Module paths of earlier releases, kept as thin aliases that warn.
+
+The package was reorganised into wings (:mod:`attitude.propagation`,
+:mod:`attitude.formats`); the old flat paths (``attitude.splitting``,
+``attitude.aem``, ...) keep working: each is a module object registered under the old
+name whose attributes are those of the new module, and reading one issues a
+:class:`DeprecationWarning` that names the new path.  Nothing is imported until an
+attribute is read.
+
+Examples
+--------
+>>> import warnings, attitude.splitting as old
+>>> with warnings.catch_warnings(record=True) as caught:
+...     warnings.simplefilter("always")
+...     f = old.free_flow
+>>> f.__module__, caught[0].category.__name__
+('attitude.propagation.splitting', 'DeprecationWarning')
+>>> print(caught[0].message)
+attitude.splitting is deprecated; use attitude.propagation.splitting.free_flow
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+import warnings
+
+__all__ = ["MOVED_MODULES", "DeprecatedModule", "install"]
+
+#: Old module path -> new module path.
+MOVED_MODULES = {
+    "attitude.propagate": "attitude.propagation.propagator",
+    "attitude.torquefree": "attitude.propagation.torquefree",
+    "attitude.splitting": "attitude.propagation.splitting",
+    "attitude.integrate": "attitude.propagation.reference",
+    "attitude.events": "attitude.propagation.events",
+    "attitude.aem": "attitude.formats.aem",
+    "attitude.spice": "attitude.formats.spice",
+    "attitude.streaming": "attitude.formats.streaming",
+}
+
+
+class DeprecatedModule(types.ModuleType):
+    """A module registered under an old path that forwards every attribute to the new
+    module, with a :class:`DeprecationWarning` naming the new path."""
+
+    def __init__(self, old: str, new: str):
+        super().__init__(old, f"Deprecated alias of :mod:`{new}`.")
+        self.__new_path = new
+
+    def __getattr__(self, name: str):
+        if name.startswith("__"):              # import machinery probing dunders
+            raise AttributeError(name)
+        new = self.__new_path
+        # imported on first use: the new module may be an optional wing (SPICE)
+        value = getattr(importlib.import_module(new), name)
+        warnings.warn(f"{self.__name__} is deprecated; use {new}.{name}",
+                      DeprecationWarning, stacklevel=2)
+        return value
+
+    def __dir__(self):
+        return dir(importlib.import_module(self.__new_path))
+
+
+def install() -> None:
+    """Register the aliases of :data:`MOVED_MODULES` in ``sys.modules`` (idempotent).
+
+    Examples
+    --------
+    >>> install(); "attitude.aem" in sys.modules
+    True
+    """
+    for old, new in MOVED_MODULES.items():
+        sys.modules.setdefault(old, DeprecatedModule(old, new))

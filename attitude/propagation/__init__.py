@@ -1,0 +1,18 @@
+"""Propagation: from a body and a state at an epoch to an ephemeris.
+
+One entry point, :func:`attitude.propagate` (:mod:`.propagator`), and the methods behind
+it, one module each:
+
+- :mod:`.torquefree`: the exact Euler–Poinsot solution (Jacobi elliptic functions),
+  vectorised over bodies and times, with :mod:`.elliptic` (Landen transformations,
+  Bulirsch's ``cel``, double-double arithmetic);
+- :mod:`.splitting`: the splitting integrator with torques (exact free flow composed with
+  torque kicks, orders 2, 4 and 6);
+- :mod:`.reference`: the DOP853 reference integrator of Euler's equations;
+- :mod:`.events`: events located on any method's solution;
+- :mod:`.batch`: populations in chunks, in this process or as dask tasks, and
+  :mod:`.cluster` for dask clusters.
+
+The package imports nothing itself, so that a model module may use one kernel
+(``attitude.propagation.torquefree``) without loading the whole wing.
+"""
