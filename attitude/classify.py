@@ -50,14 +50,10 @@ from .regimes import PERIOD_KEYS, REGIMES, Thresholds
 from .state import AttitudeState
 
 __all__ = [
-    "Thresholds",
     "Window",
     "Transition",
     "Classification",
-    "LyapunovResult",
-    "ClassificationError",
     "classify",
-    "lyapunov_exponent",
     "initial_state",
     "format_classification",
     "classification_json",

@@ -40,8 +40,6 @@ from .ephemeris import Ephemeris
 from .errors import DiagnosticsError, InsufficientDataError
 
 __all__ = [
-    "DiagnosticsError",
-    "InsufficientDataError",
     "PrincipalSeries",
     "MeasuredPeriod",
     "principal_series",

@@ -49,7 +49,6 @@ __all__ = [
     "TabulatedPath",
     "CallablePath",
     "ConstantPosition",
-    "OrbitError",
     "as_path",
     "solve_kepler",
     "mean_from_eccentric",

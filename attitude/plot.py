@@ -44,7 +44,7 @@ from .propagation.torquefree import diagnose_many
 from .quaternion import rotate
 from .statistics import attitude_spread
 
-__all__ = ["PlotUnavailableError", "polhode", "herpolhode", "body_axes", "euler_angles",
+__all__ = ["polhode", "herpolhode", "body_axes", "euler_angles",
            "regime_timeline", "ensemble_regimes", "ensemble_spread", "figures",
            "save_figures", "FIGURES", "ENSEMBLE_FIGURES"]
 

@@ -76,7 +76,6 @@ __all__ = [
     "HeavyTopPivot",
     "UniformField",
     "TiltedDipoleField",
-    "TorqueConfigError",
     "from_config",
     "TORQUE_TYPES",
     "EARTH_MU",

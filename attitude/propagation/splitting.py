@@ -439,7 +439,8 @@ def free_flow(moments, quat, omega, h):
 
     Accuracy: a few ulp per step (tested against
     :func:`attitude.propagation.torquefree.free_rotation` in ``tests/test_splitting.py``);
-    near the separatrix the motion itself is ill-conditioned and ``scipy.special.ellipj`` loses ~``eps / m1`` relative.
+    near the separatrix the motion itself is ill-conditioned and ``scipy.special.ellipj``
+    loses ~``eps / m1`` relative.
     """
     moments = np.asarray(moments, dtype=float)
     quat = np.asarray(quat, dtype=float)
