@@ -20,7 +20,7 @@ from . import quaternion as quat
 from .errors import InvalidStateError
 from .propagation.torquefree import diagnose_many
 from .quantities import to_si
-from .state import direction_frame
+from .state import direction_frame, spin_axis_quaternion
 
 __all__ = ["MODELS", "DEFAULTS", "DIRECTION_SIGMA", "DIRECTION_PARAMETERS", "draw",
            "tumbling_state", "spin_state", "invalid_where"]
@@ -265,7 +265,7 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
                moment_c=1.0):
     """Principal-axis spins about C along (RA, Dec) at ``spin_rate`` (rad/s), rotated by
     ``rotation_angle`` about the spin axis from the convention of
-    :func:`attitude.scenario.spin_axis_state` (vectorised; SI).
+    :func:`attitude.state.spin_axis_quaternion` (vectorised; SI).
 
     Returns moments (N, 3), quaternion (N, 4) principal -> inertial, omega (N, 3) and
     invalid ``{index: reason}``.
@@ -275,8 +275,7 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
                                     rotation_angle, moment_c)))
     m, bad = _moments(ra_, rb, mc)
     bad.update(invalid_where(~np.isfinite(rate), lambda i: "spin rate must be finite"))
-    q = (Rotation.from_matrix(direction_frame(ra, dec))
-         * Rotation.from_euler("Z", psi[:, None])).as_quat()
+    q = spin_axis_quaternion(ra, dec, about="C", rotation_angle=psi)
     omega = np.stack([np.zeros_like(rate), np.zeros_like(rate), rate], axis=-1)
     return m, q, omega, dict(sorted(bad.items()))
 

@@ -42,7 +42,7 @@ from .regimes import PERIOD_KEYS, REGIMES
 from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
 from .sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
 from .sampling import MODELS
-from .state import AttitudeState, check_frame, direction_frame
+from .state import AttitudeState, check_frame, spin_axis_quaternion
 from .torques import from_config
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
@@ -473,20 +473,21 @@ _SPIN_KEYS = ("spin_axis", "spin_rate", "spin_period", "spin_about")
 def spin_axis_state(body: RigidBody, ra: float, dec: float, rate: float,
                     about: str = "C") -> tuple[Rotation, np.ndarray]:
     """Attitude (body -> inertial) and body-frame rates of a principal-axis spin at
-    ``rate`` (rad/s) about the principal axis ``about`` (``"A"``, ``"B"``, ``"C"``) pointing
-    to right ascension ``ra``, declination ``dec`` (rad) of the inertial frame.
+    ``rate`` (rad/s) about the principal axis ``about`` pointing to right ascension
+    ``ra``, declination ``dec`` (rad): :meth:`attitude.AttitudeState.from_spin_axis`
+    without the epoch.
 
-    The spin axis goes to ``n = (cos dec cos ra, cos dec sin ra, sin dec)``; the rotation
-    phase is fixed by putting the next principal axis (B for A, C for B, A for C) along
-    the node ``z x n`` (along ``y`` when ``n`` is a pole).
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> rot, w = spin_axis_state(body, 0.0, np.pi / 2, 1e-3)
+    >>> np.round(rot.apply([0.0, 0.0, 1.0]), 12) + 0.0, w
+    (array([0., 0., 1.]), array([0.   , 0.   , 0.001]))
     """
-    k = "ABC".index(about)
-    # principal -> inertial: column k is n, column k+1 the node, column k+2 completes
-    frame = direction_frame(np.float64(ra), np.float64(dec))       # columns node, ., n
-    principal_to_inertial = Rotation.from_matrix(np.roll(frame, k + 1, axis=-1))
-    attitude = principal_to_inertial * body.body_to_principal
-    axis_body = body.principal_axes[:, k]
-    return attitude, rate * axis_body
+    q = spin_axis_quaternion(ra, dec, about=about)
+    axis_body = body.principal_axes[:, "ABC".index(about)]
+    return Rotation.from_quat(q) * body.body_to_principal, rate * axis_body
 
 
 def _spin_state(r: _Reader, table: dict, body: RigidBody) -> tuple[Rotation, np.ndarray]:

@@ -21,7 +21,7 @@ from .errors import InvalidStateError
 from .quantities import to_si
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
-           "direction_frame"]
+           "direction_frame", "spin_axis_quaternion"]
 
 #: Inertial frame labels accepted (case-insensitive).  No frame conversion is ever done:
 #: the label travels with the data.  ``INERTIAL`` is a generic label for synthetic studies.
@@ -87,6 +87,40 @@ def direction_frame(ra, dec) -> np.ndarray:
     norm = np.linalg.norm(node, axis=-1, keepdims=True)
     node = np.where(norm < 1e-12, [0.0, 1.0, 0.0], node / np.where(norm < 1e-12, 1.0, norm))
     return np.stack([node, np.cross(n, node), n], axis=-1)
+
+
+def spin_axis_quaternion(ra, dec, *, about: str = "C", rotation_angle=0.0) -> np.ndarray:
+    """Quaternions (..., 4), principal -> inertial, scalar-last, of bodies whose principal
+    axis ``about`` (``"A"``, ``"B"`` or ``"C"``) points to right ascension ``ra`` and
+    declination ``dec`` (rad; arrays broadcast).
+
+    The rotation phase is fixed by putting the next principal axis (B for A, C for B, A
+    for C) along the node ``z x n`` of the direction ``n`` (the inertial y axis at a
+    pole, :func:`direction_frame`), then turning by ``rotation_angle`` (rad) about the
+    spin axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q = spin_axis_quaternion(0.0, np.pi / 2)       # C along the inertial z axis
+    >>> r = Rotation.from_quat(q)
+    >>> np.round(r.apply([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]), 12) + 0.0   # C to n, A to y
+    array([[0., 0., 1.],
+           [0., 1., 0.]])
+    >>> spin_axis_quaternion([0.0, 1.0], [0.0, 0.5], about="A").shape
+    (2, 4)
+    """
+    if about not in ("A", "B", "C"):
+        raise InvalidStateError(f"about: expected 'A', 'B' or 'C', got {about!r}")
+    k = "ABC".index(about)
+    ra, dec, angle = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in
+                                           (ra, dec, rotation_angle)))
+    # principal -> inertial: column k is n, column k+1 the node, column k+2 completes it
+    frame = np.roll(direction_frame(ra, dec), k + 1, axis=-1)
+    turn = np.zeros(angle.shape + (3,))
+    turn[..., k] = angle
+    return (Rotation.from_matrix(frame.reshape(-1, 3, 3))
+            * Rotation.from_rotvec(turn.reshape(-1, 3))).as_quat().reshape(angle.shape + (4,))
 
 
 @dataclass(frozen=True, eq=False)
@@ -161,6 +195,38 @@ class AttitudeState:
         except ValueError as exc:
             raise InvalidStateError(f"euler: {exc}") from None
         return cls(epoch, rot, omega_body, frame)
+
+    @classmethod
+    def from_spin_axis(cls, body: RigidBody, ra, dec, rate, *, epoch, about: str = "C",
+                       rotation_angle=0.0, frame: str = "ICRF") -> AttitudeState:
+        """A principal-axis spin at ``rate`` about the principal axis ``about`` of
+        ``body``, pointing to right ascension ``ra``, declination ``dec`` of the inertial
+        frame (angles and rate: Quantities, strings, or rad and rad/s), turned by
+        ``rotation_angle`` about it from the phase of :func:`spin_axis_quaternion`.
+
+        Examples
+        --------
+        >>> import astropy.units as u
+        >>> from attitude import AttitudeState, RigidBody
+        >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> s = AttitudeState.from_spin_axis(body, 250 * u.deg, -75 * u.deg,
+        ...                                  360 * u.deg / u.h, epoch="2030-01-01")
+        >>> s.omega_body.round(6) + 0.0      # about C, 1 turn per hour
+        array([0.      , 0.      , 0.001745])
+        >>> bool(s.angular_momentum(body)[2] < 0)    # the pole is at dec = -75 deg
+        True
+        """
+        ra, dec, angle = (float(to_si(x, "rad", name=name, error=InvalidStateError))
+                          for x, name in ((ra, "ra"), (dec, "dec"),
+                                          (rotation_angle, "rotation_angle")))
+        rate = float(to_si(rate, "rad/s", name="rate", error=InvalidStateError))
+        if not abs(dec) <= np.pi / 2 * (1 + 1e-12):
+            raise InvalidStateError(f"dec: must be within +-90 deg, got "
+                                    f"{np.degrees(dec):.6g} deg")
+        q = spin_axis_quaternion(ra, dec, about=about, rotation_angle=angle)
+        attitude = Rotation.from_quat(q) * body.body_to_principal
+        axis = body.principal_axes[:, "ABC".index(about)]
+        return cls(epoch, attitude, rate * axis, frame)
 
     def replace(self, **changes) -> AttitudeState:
         """A copy with some fields changed."""

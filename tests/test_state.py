@@ -8,6 +8,8 @@ from scipy.spatial.transform import Rotation
 
 from attitude import AttitudeState, InvalidStateError, RigidBody
 
+EPS = float(np.finfo(float).eps)
+
 EPOCH = Time("2029-04-13T00:00:00", scale="tdb")
 
 
@@ -72,3 +74,30 @@ def test_non_unit_quaternion_is_refused():
         AttitudeState.from_quaternion([0, 0, 0, 2.0], epoch=EPOCH, omega_body=[0, 0, 1])
     with pytest.raises(ValueError):  # InvalidStateError is also a ValueError
         AttitudeState.from_euler("ZQZ", [1, 2, 3], epoch=EPOCH, omega_body=[0, 0, 1])
+
+
+def test_from_spin_axis_points_the_axis_and_matches_the_scenario_and_sampling_paths():
+    """One spin-axis construction (attitude.state.spin_axis_quaternion) behind
+    AttitudeState.from_spin_axis, scenario.spin_axis_state and the "spin" sampling
+    model: the axis points to (ra, dec), the rate is about it, all three agree to a few
+    ulps of the unit vectors (8 eps) and of the rate (1e-3 * eps)."""
+    from attitude.sampling import spin_state
+    from attitude.scenario import spin_axis_state
+
+    body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    ra, dec, rate = np.radians(250.0), np.radians(-75.0), 1e-3
+    n = np.array([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)])
+    for about, k in (("A", 0), ("B", 1), ("C", 2)):
+        s = AttitudeState.from_spin_axis(body, ra * u.rad, dec * u.rad, rate,
+                                         epoch="2030-01-01", about=about)
+        axis = body.principal_axes[:, k]
+        np.testing.assert_allclose(s.attitude.apply(axis), n, atol=8 * EPS)
+        np.testing.assert_allclose(s.omega_body, rate * axis, atol=1e-19)
+        rot, w = spin_axis_state(body, ra, dec, rate, about)
+        assert (rot.inv() * s.attitude).magnitude() < 8 * EPS
+        np.testing.assert_allclose(w, s.omega_body, atol=1e-19)
+    _, q, w, bad = spin_state(ra, dec, rate, 1 / 3, 2 / 3, moment_c=3.0)
+    s = AttitudeState.from_spin_axis(body, ra, dec, rate, epoch="2030-01-01")
+    assert not bad
+    assert (Rotation.from_quat(q[0]).inv() * s.attitude).magnitude() < 8 * EPS
+    np.testing.assert_allclose(w[0], s.omega_body, atol=1e-19)
