@@ -23,6 +23,7 @@ import sys
 
 from . import (
     ensemble,  # noqa: F401  (att.ensemble.regime_fractions, ...)
+    errors,
     quantities,  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
     torques,  # noqa: F401  (att.torques.GravityGradient, ...)
 )
@@ -40,8 +41,10 @@ from .errors import (
     InvalidBodiesWarning,
     InvalidInertiaError,
     InvalidStateError,
+    MissingDependencyError,
     NearSeparatrixWarning,
     OrbitError,
+    PlotUnavailableError,
     PropagationError,
     ScenarioError,
     ShapeModelError,
@@ -77,21 +80,7 @@ __all__ = [
     "INERTIAL_FRAMES",
     "SYMMETRY_RTOL",
     "TRIANGLE_RTOL",
-    "AttitudeError",
-    "InvalidInertiaError",
-    "InvalidStateError",
-    "ShapeModelError",
-    "ScenarioError",
-    "PropagationError",
-    "EphemerisFormatError",
-    "OrbitError",
-    "TorqueConfigError",
-    "DiagnosticsError",
-    "InsufficientDataError",
-    "ClassificationError",
-    "AttitudeWarning",
-    "NearSeparatrixWarning",
-    "InvalidBodiesWarning",
+    *errors.__all__,          # every exception and warning
 ]
 
 

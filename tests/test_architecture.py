@@ -195,3 +195,8 @@ def test_still_modules_after_reorganisation():
         warnings.simplefilter("error")
         for name in ("ensemble", "torques", "classify", "diagnostics", "scenario"):
             importlib.import_module(f"attitude.{name}")
+
+
+def test_every_public_name_exists():
+    missing = [n for n in attitude.__all__ if not hasattr(attitude, n)]
+    assert not missing
