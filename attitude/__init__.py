@@ -31,25 +31,7 @@ from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
 from .classify import Classification, classify
 from .deprecation import MOVED_MODULES, install
 from .ephemeris import Ephemeris
-from .errors import (
-    AttitudeError,
-    AttitudeWarning,
-    ClassificationError,
-    DiagnosticsError,
-    EphemerisFormatError,
-    InsufficientDataError,
-    InvalidBodiesWarning,
-    InvalidInertiaError,
-    InvalidStateError,
-    MissingDependencyError,
-    NearSeparatrixWarning,
-    OrbitError,
-    PlotUnavailableError,
-    PropagationError,
-    ScenarioError,
-    ShapeModelError,
-    TorqueConfigError,
-)
+from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
 from .orbit import KeplerOrbit
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
