@@ -30,6 +30,7 @@ from . import (
 from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
 from .classify import Classification, classify
 from .deprecation import MOVED_MODULES, install
+from .environment import IGRF, TLEOrbit
 from .ephemeris import Ephemeris
 from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
 from .orbit import KeplerOrbit
@@ -54,6 +55,8 @@ __all__ = [
     "nutation_crossing",
     "event_table",
     "KeplerOrbit",
+    "TLEOrbit",
+    "IGRF",
     "torques",
     "propagate",
     "diagnose",

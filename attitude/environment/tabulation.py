@@ -1,0 +1,98 @@
+"""Quantities along time that do not depend on the attitude: tabulate once, interpolate.
+
+An orbit, the field along it and the Sun's direction are the same whatever the body
+does, but the models that give them (SGP4 with an astropy frame rotation, IGRF's
+spherical harmonics, an ephemeris of the Sun) cost milliseconds per call, and a
+propagation asks for them at every step.  :class:`TimeTable` evaluates the model on a
+uniform grid, one segment of the time line at a time (segments are computed when a
+time inside them is first asked for, then kept), and interpolates between the nodes:
+a cubic Hermite polynomial when the model also gives the derivative (an orbit's
+velocity), else a cubic spline.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
+__all__ = ["TimeTable"]
+
+
+class TimeTable:
+    """A vector function of time, tabulated per segment and interpolated.
+
+    Parameters
+    ----------
+    evaluate : callable
+        ``evaluate(t) -> values`` for a 1-D array of times (s since the epoch of the
+        caller), values of shape ``(n, k)``; or ``(values, derivatives)`` when
+        ``derivative=True``.
+    spacing : float
+        Node spacing, s.  The interpolation error of a cubic is about
+        ``(spacing * rate)^4 / 384`` of the amplitude for a signal of angular rate
+        ``rate``; choose the spacing from the fastest rate of the model.
+    segment : float
+        Length of one segment of nodes, s (a whole multiple of ``spacing``).
+    derivative : bool
+        Whether ``evaluate`` also returns the time derivative (Hermite interpolation).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = TimeTable(lambda t: np.stack([np.sin(t / 100), np.cos(t / 100)], axis=-1),
+    ...                   spacing=10.0, segment=1000.0)
+    >>> err = table(np.array([123.4, -50.0])) - [[np.sin(1.234), np.cos(1.234)],
+    ...                                         [np.sin(-0.5), np.cos(-0.5)]]
+    >>> bool(np.abs(err).max() < 1e-6)
+    True
+    """
+
+    def __init__(self, evaluate: Callable, *, spacing: float, segment: float,
+                 derivative: bool = False):
+        n = round(segment / spacing)
+        if not (spacing > 0 and n >= 4 and abs(n * spacing - segment) <= 1e-9 * segment):
+            raise ValueError(f"segment ({segment} s) must hold a whole number >= 4 of "
+                             f"node spacings ({spacing} s)")
+        self._evaluate = evaluate
+        self.spacing = float(spacing)
+        self.segment = float(segment)
+        self.derivative = derivative
+        self._nodes = n
+        self._splines: dict[int, Callable] = {}
+
+    def _spline(self, k: int) -> Callable:
+        spline = self._splines.get(k)
+        if spline is None:
+            t = k * self.segment + self.spacing * np.arange(self._nodes + 1)
+            if self.derivative:
+                values, rates = self._evaluate(t)
+                spline = CubicHermiteSpline(t, values, rates, axis=0)
+            else:
+                spline = CubicSpline(t, self._evaluate(t), axis=0)
+            self._splines[k] = spline
+        return spline
+
+    def _call(self, t, nu: int) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        flat = t.reshape(-1)
+        if not np.all(np.isfinite(flat)):
+            raise ValueError("times must be finite")
+        k = np.floor(flat / self.segment).astype(int)
+        out = None
+        for seg in np.unique(k):
+            mask = k == seg
+            part = self._spline(int(seg))(flat[mask], nu)
+            if out is None:
+                out = np.empty((flat.size,) + part.shape[1:])
+            out[mask] = part
+        return out.reshape(t.shape + out.shape[1:])
+
+    def __call__(self, t) -> np.ndarray:
+        """Interpolated values at ``t`` (s), shape ``t.shape + (k,)``."""
+        return self._call(t, 0)
+
+    def rate(self, t) -> np.ndarray:
+        """Interpolated time derivative at ``t`` (s), shape ``t.shape + (k,)``."""
+        return self._call(t, 1)
