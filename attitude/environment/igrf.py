@@ -22,9 +22,10 @@ from .tabulation import TimeTable
 
 __all__ = ["IGRF", "IGRF_VALIDITY", "spherical_to_cartesian"]
 
-#: The time span of the IGRF-14 coefficients (definitive and predicted), UTC.
-IGRF_VALIDITY = (Time("1900-01-01T00:00:00", scale="utc"),
-                 Time("2030-01-01T00:00:00", scale="utc"))
+#: The time span of the IGRF-14 coefficients (definitive and predicted); TT, since UTC
+#: is not defined ahead of the leap-second table.
+IGRF_VALIDITY = (Time("1900-01-01T00:00:00", scale="tt"),
+                 Time("2030-01-01T00:00:00", scale="tt"))
 
 
 def spherical_to_cartesian(position: np.ndarray, b_r, b_theta, b_phi) -> np.ndarray:
@@ -116,7 +117,7 @@ class IGRF:
         if np.any(outside):
             i = int(np.flatnonzero(outside)[0])
             raise OrbitError(f"t = {t[i]:.0f} s ({times[i].utc.isot} UTC) lies outside "
-                             f"IGRF-14's span {lo.utc.isot[:10]} to {hi.utc.isot[:10]}; "
+                             f"IGRF-14's span {lo.isot[:10]} to {hi.isot[:10]}; "
                              f"use a TiltedDipoleField for other epochs", key="epoch")
 
     def _evaluate(self, t: np.ndarray) -> np.ndarray:
