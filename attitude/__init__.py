@@ -33,6 +33,13 @@ from .deprecation import MOVED_MODULES, install
 from .environment import IGRF, TLEOrbit
 from .ephemeris import Ephemeris
 from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
+from .fitting import (
+    AngularVelocityObservations,
+    AttitudeObservations,
+    PeriodObservations,
+    fit,
+    sample_posterior,
+)
 from .orbit import KeplerOrbit
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
@@ -55,6 +62,11 @@ __all__ = [
     "nutation_crossing",
     "event_table",
     "KeplerOrbit",
+    "fit",
+    "sample_posterior",
+    "AttitudeObservations",
+    "AngularVelocityObservations",
+    "PeriodObservations",
     "TLEOrbit",
     "IGRF",
     "torques",
