@@ -193,3 +193,14 @@ def test_bad_observations_name_the_field(make, key):
     with pytest.raises(AttitudeError) as err:
         make()
     assert err.value.key == key
+
+
+def test_a_fit_that_does_not_converge_says_so():
+    rng = np.random.default_rng(9)
+    truth = _state(rng, "SAM")
+    t = np.linspace(0.0, 20.0, 30)
+    q = att.propagate(BODY, truth, t).dataset["quaternion"].values
+    res = att.fit(att.AttitudeObservations(t, q, "0.01 deg"), BODY,
+                  _perturbed_guess(truth, rng, 0.2), max_nfev=2, multistart=False)
+    assert not res.success
+    assert "maximum number of function evaluations" in res.message

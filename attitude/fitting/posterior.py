@@ -63,7 +63,7 @@ class Posterior:
     def regime_fractions(self) -> dict:
         """Fraction of the samples in each regime (how sure are we that it is SAM?)."""
         names, counts = np.unique(self.samples["regime"].values.ravel(), return_counts=True)
-        return {str(k): float(c) / counts.sum() for k, c in zip(names, counts)}
+        return {str(k): float(c / counts.sum()) for k, c in zip(names, counts)}
 
 
 def sample_posterior(result: FitResult, observations=None, *, n_walkers: int = 32,
