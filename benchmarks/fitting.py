@@ -13,12 +13,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from _machine import cpu_name
 from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude.fitting import PARAMETERS, free_parameters
-
-from _machine import cpu_name
 
 N_EPOCHS, N_WALKERS = 1000, 64
 
