@@ -69,6 +69,17 @@ class Window:
     ``start``/``stop`` (s since the epoch) bound the samples used; ``regime``,
     ``margin`` (in ``margin_units``) to ``boundary``, ``confidence``, ``decided_by`` as in
     :class:`Classification`; ``periods`` measured inside the window (s, may be empty).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 6000.0, 3001))
+    >>> w = att.classify(eph, window="3000 s").windows[0]
+    >>> w.regime, w.start
+    ('SAM', 0.0)
     """
 
     start: float
@@ -86,7 +97,14 @@ class Window:
 @dataclass(frozen=True)
 class Transition:
     """A change of regime at ``epoch`` (s since the epoch), refined from the per-sample
-    osculating quantities: ``quantity`` crossed ``threshold`` there."""
+    osculating quantities: ``quantity`` crossed ``threshold`` there.
+
+    Examples
+    --------
+    >>> from attitude.classify import Transition
+    >>> Transition(epoch=120.0, before="LAM", after="SAM", quantity="m1", threshold=0.0)
+    Transition(epoch=120.0, before='LAM', after='SAM', quantity='m1', threshold=0.0)
+    """
 
     epoch: float
     before: str
@@ -151,6 +169,16 @@ class Classification:
     span : (float, float)
         First and last sample (s since the epoch).
     thresholds : Thresholds
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> c = att.classify(att.propagate(body, state, np.linspace(0.0, 6000.0, 3001)))
+    >>> c.regime, c.boundary              # well inside SAM: nearest is the spin about C
+    ('SAM', 'PA-short')
     """
 
     regime: str
@@ -459,7 +487,20 @@ def _method_of(eph: Ephemeris) -> str | None:
 
 def initial_state(eph: Ephemeris, body_index: int | None = None) -> AttitudeState:
     """The state at the first sample of an ephemeris (to restart a propagation, e.g.
-    for :func:`lyapunov_exponent`); its epoch is that of the first sample."""
+    for :func:`lyapunov_exponent`); its epoch is that of the first sample.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> from attitude.classify import initial_state
+    >>> eph = att.propagate(body, state, [100.0, 200.0])
+    >>> s = initial_state(eph)
+    >>> bool(np.allclose(s.omega_body, eph.dataset["angular_velocity"].values[0]))
+    True
+    """
     ds = eph.dataset
     q = ds["quaternion"].values
     w = ds["angular_velocity"].values

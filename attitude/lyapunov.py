@@ -59,6 +59,17 @@ class LyapunovResult:
     control_local_exponents : ndarray or None
     method : str
         Propagator used (``att.propagate`` ``method=``).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> from attitude.lyapunov import lyapunov_exponent
+    >>> r = lyapunov_exponent(body, state, None, 2000.0, intervals=8)
+    >>> r.chaotic                         # a free rigid body is regular
+    False
     """
 
     exponent: float
@@ -236,6 +247,16 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
        characteristic exponents for smooth dynamical systems. *Meccanica* 15, 9-20.
     .. [2] Wisdom, J., Peale, S. J. & Mignard, F. (1984). The chaotic rotation of
        Hyperion. *Icarus* 58, 137-152.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> r = lyapunov_exponent(body, state, None, 2000.0, intervals=8)
+    >>> bool(abs(r.exponent) < 5 * r.uncertainty + 1e-3)
+    True
     """
     th = thresholds or Thresholds()
     if isinstance(duration, (str, u.Quantity)):

@@ -76,6 +76,12 @@ def mean_from_eccentric(E, e):
     -------
     M : ndarray or float
         Mean anomaly, rad (same branch as ``E``: no reduction modulo 2 pi).
+
+    Examples
+    --------
+    >>> from attitude.orbit import mean_from_eccentric, solve_kepler
+    >>> round(float(solve_kepler(mean_from_eccentric(1.2, 0.3), 0.3)), 12)
+    1.2
     """
     E = np.asarray(E, dtype=float)
     return E - np.asarray(e, dtype=float) * np.sin(E)
@@ -460,6 +466,15 @@ class TabulatedPath:
     The interpolation error of a smooth trajectory sampled every ``h`` seconds scales as
     ``h^4``: sample an orbit at least ~50 times per revolution for 1e-6 relative
     accuracy.  :meth:`velocity` is the spline's derivative.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.orbit import TabulatedPath
+    >>> t = np.linspace(0.0, 100.0, 11)
+    >>> path = TabulatedPath(t, np.stack([7e6 + t, 0 * t, 0 * t], axis=-1))
+    >>> path.position(55.0)
+    array([7000055.,       0.,       0.])
     """
 
     def __init__(self, times, positions, *, extrapolate: bool = False):
@@ -510,6 +525,14 @@ class CallablePath:
     The function is first called with the whole array of times; if it fails or does not
     return shape ``t.shape + (3,)``, it is called once per time (so a scalar-only function
     works, slowly).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.orbit import CallablePath
+    >>> path = CallablePath(lambda t: np.stack([np.cos(t), np.sin(t), 0 * t], -1) * 7e6)
+    >>> path.position(0.0)
+    array([7000000.,       0.,       0.])
     """
 
     def __init__(self, function: Callable):
@@ -544,7 +567,14 @@ class CallablePath:
 
 class ConstantPosition:
     """A fixed inertial position (m): a body hanging at rest relative to the primary
-    (handy for tests and static analyses)."""
+    (handy for tests and static analyses).
+
+    Examples
+    --------
+    >>> from attitude.orbit import ConstantPosition
+    >>> ConstantPosition([7e6, 0, 0]).position([0.0, 1.0]).shape
+    (2, 3)
+    """
 
     def __init__(self, position):
         r = np.asarray(_si(position, "m", "position"), dtype=float)
@@ -566,6 +596,12 @@ def as_path(obj):
     Accepts an object that already has ``position(t)`` (:class:`KeplerOrbit`,
     :class:`TabulatedPath`, ...), a callable ``t -> position`` (wrapped in
     :class:`CallablePath`), or a fixed 3-vector (:class:`ConstantPosition`).
+
+    Examples
+    --------
+    >>> from attitude.orbit import as_path
+    >>> as_path([7e6, 0.0, 0.0])
+    ConstantPosition([7000000.0, 0.0, 0.0])
     """
     if hasattr(obj, "position") and callable(obj.position):
         return obj

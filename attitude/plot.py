@@ -111,7 +111,20 @@ def polhode(eph):
     """Binet construction: the polhode on the energy ellipsoid (``omega`` in principal
     axes) and on the angular-momentum sphere (``L`` in principal axes), with the
     separatrix on the sphere.  The surfaces are those of the initial state: for a run
-    with torques the curve leaves them as ``E`` and ``|L|`` change."""
+    with torques the curve leaves them as ``E`` and ``|L|`` change.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> from attitude.plot import polhode
+    >>> fig = polhode(eph)
+    >>> len(fig.axes)                   # the energy ellipsoid and the momentum sphere
+    2
+    """
     series = _series(eph)
     I, L, E2 = _invariants(series)
     sl = _thin(series.time.size)
@@ -162,7 +175,20 @@ def polhode(eph):
 
 def herpolhode(eph):
     """The herpolhode: the tip of the inertial ``omega`` projected on the invariable plane
-    (the plane normal to the initial angular momentum)."""
+    (the plane normal to the initial angular momentum).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> from attitude.plot import herpolhode
+    >>> fig = herpolhode(eph)
+    >>> fig.axes[0].get_ylabel().endswith("(rad/s)")
+    True
+    """
     series = _series(eph)
     Li = series.momentum_inertial
     Z = Li[0] / np.linalg.norm(Li[0])
@@ -188,7 +214,20 @@ def herpolhode(eph):
 
 def body_axes(eph):
     """The principal axes A, B, C (inertial frame) on the unit sphere over time, and the
-    direction of the angular momentum."""
+    direction of the angular momentum.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> from attitude.plot import body_axes
+    >>> fig = body_axes(eph)
+    >>> fig.axes[0].name
+    '3d'
+    """
     series = _series(eph)
     sl = _thin(series.time.size)
     q = series.quaternion[sl]
@@ -219,7 +258,20 @@ def body_axes(eph):
 
 def euler_angles(eph, reference_axis: int | None = None):
     """Precession ``phi``, nutation ``theta`` and rotation ``psi`` (3-1-3 in the
-    angular-momentum frame, degrees) and their rates (deg per time unit) against time."""
+    angular-momentum frame, degrees) and their rates (deg per time unit) against time.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> from attitude.plot import euler_angles
+    >>> fig = euler_angles(eph)
+    >>> len(fig.axes)                   # angles and rates of phi, theta, psi
+    6
+    """
     series = _series(eph)
     I, L, E2 = _invariants(series)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -249,7 +301,20 @@ def euler_angles(eph, reference_axis: int | None = None):
 
 def regime_timeline(eph, classification=None):
     """The regime over time (``classify(eph).segments``; pass ``classification`` to reuse
-    one) above the excitation ``L^2 / (2 E B)`` (1 on the separatrix, > 1 SAM, < 1 LAM)."""
+    one) above the excitation ``L^2 / (2 E B)`` (1 on the separatrix, > 1 SAM, < 1 LAM).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> from attitude.plot import regime_timeline
+    >>> fig = regime_timeline(eph)
+    >>> len(fig.axes)
+    2
+    """
     if classification is None:
         classification = classify(eph, require_periods=False)
     series = _series(eph)
@@ -285,7 +350,22 @@ def regime_timeline(eph, classification=None):
 def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
     """An ensemble's attitude uncertainty: quantiles over the bodies of the angle from
     the nominal attitude (:func:`attitude.ensemble.spread_quantiles`) against time, and
-    the distribution of that angle at the last epoch."""
+    the distribution of that angle at the last epoch.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     20, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0})
+    >>> eph = att.propagate(ens, np.linspace(0.0, 86400.0, 25))
+    >>> from attitude.plot import ensemble_spread
+    >>> fig = ensemble_spread(eph)
+    >>> len(fig.axes) >= 1
+    True
+    """
     spread = attitude_spread(eph, nominal)
     if hasattr(spread.data, "dask"):
         spread = spread.compute()
@@ -313,7 +393,22 @@ def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
 def ensemble_regimes(eph):
     """A population at a glance: the torque-free regime of each valid body at the first
     epoch (bar chart of the fractions) and the distribution of the precession and
-    rotation periods (log scale)."""
+    rotation periods (log scale).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     20, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0})
+    >>> eph = att.propagate(ens, np.linspace(0.0, 86400.0, 25))
+    >>> from attitude.plot import ensemble_regimes
+    >>> fig = ensemble_regimes(eph)
+    >>> len(fig.axes) >= 1
+    True
+    """
     ds = eph.dataset
     ok = ds["status"].values == 0 if "status" in ds else np.ones(ds.sizes["body"], bool)
     moments = np.asarray(ds["principal_moments"].values, dtype=float)[ok]
@@ -361,7 +456,19 @@ def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
     """Every figure of :data:`FIGURES` for ``eph``: ``{name: Figure}``.  The regime
     timeline is included when ``regime`` is true, or by default when a
     ``classification`` is given (perturbed runs).  A batch (ensemble) ephemeris gets
-    :data:`ENSEMBLE_FIGURES` instead."""
+    :data:`ENSEMBLE_FIGURES` instead.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> from attitude.plot import figures
+    >>> sorted(figures(eph))
+    ['body_axes', 'euler_angles', 'herpolhode', 'polhode']
+    """
     if eph.is_batch:
         nominal = eph.dataset.attrs.get("nominal_body")
         out = {"regimes": ensemble_regimes(eph)}
@@ -381,7 +488,22 @@ def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
 
 def save_figures(eph, stem: str | Path, classification=None, *, regime: bool | None = None,
                  dpi: int = 100) -> list[Path]:
-    """Write :func:`figures` as ``<stem>_<name>.png``; returns the paths."""
+    """Write :func:`figures` as ``<stem>_<name>.png``; returns the paths.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
+    >>> import tempfile, pathlib
+    >>> from attitude.plot import save_figures
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     paths = save_figures(eph, pathlib.Path(d) / "run")
+    ...     sorted(p.name for p in map(pathlib.Path, paths))
+    ['run_body_axes.png', 'run_euler_angles.png', 'run_herpolhode.png', 'run_polhode.png']
+    """
     stem = Path(stem)
     paths = []
     for name, fig in figures(eph, classification, regime=regime).items():

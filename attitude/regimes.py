@@ -67,6 +67,13 @@ class Thresholds:
         150 times that of the control) ...
     lyapunov_ratio : float
         ... and ``lambda`` above this multiple of the control's exponent.
+
+    Examples
+    --------
+    >>> from attitude.regimes import Thresholds
+    >>> t = Thresholds()
+    >>> Thresholds(separatrix=2 * t.separatrix).separatrix == 2 * t.separatrix
+    True
     """
 
     rest_rate: float = 1e-12

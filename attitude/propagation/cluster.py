@@ -24,7 +24,14 @@ _SHARED: dict = {}
 def shared_local_client():
     """``client="local"``: one LocalCluster for this process (a worker per available
     core), started on first use and closed at exit; it is the default dask client, so
-    the lazy ephemerides are computed there."""
+    the lazy ephemerides are computed there.
+
+    Examples
+    --------
+    >>> from attitude.propagation.cluster import shared_local_client
+    >>> callable(shared_local_client)     # started by propagate(..., client="local")
+    True
+    """
     if "client" not in _SHARED:
         cm = local_cluster(max(1, len(os.sched_getaffinity(0))))
         _SHARED["client"] = cm.__enter__()
@@ -34,7 +41,15 @@ def shared_local_client():
 
 def client_for(address: str):
     """The current dask client if it is connected to ``address``, else a new one (which
-    becomes the default, so the lazy ephemeris is computed there)."""
+    becomes the default, so the lazy ephemeris is computed there).
+
+    Examples
+    --------
+    >>> from attitude.propagation.cluster import client_for, local_cluster
+    >>> with local_cluster(1, processes=False) as client:
+    ...     client_for(client.scheduler.address) is client
+    True
+    """
     try:
         from distributed import Client, default_client  # optional ('attitude[dask]')
     except ImportError:
@@ -61,6 +76,13 @@ def local_cluster(n_workers: int = 2, *, threads_per_worker: int = 1, **kwargs):
         with att.ensemble.local_cluster(2) as client:
             eph = att.propagate(ensemble, times, client=client)
             eph.to_netcdf("cloud.nc")
+
+    Examples
+    --------
+    >>> from attitude.propagation.cluster import local_cluster
+    >>> with local_cluster(1, processes=False) as client:   # threads: no process start-up
+    ...     len(client.scheduler_info()["workers"])
+    1
     """
     try:
         from distributed import Client, LocalCluster  # optional ('attitude[dask]')

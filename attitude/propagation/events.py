@@ -50,6 +50,18 @@ class Event:
     vectorized : bool
         ``function`` accepts arrays ``t (M,)``, ``quaternion (M, 4)``, ``omega (M, 3)``
         and returns ``(M,)`` (faster event scans).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> from attitude.propagation.events import Event
+    >>> quarter = Event(lambda t, q, w, b: t - 250.0, terminal=True, name="quarter")
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 1000.0, 11), events=quarter)
+    >>> float(eph.dataset["time"].values[-1])
+    250.0
     """
 
     def __init__(self, function: Callable, terminal: bool = True, direction: int = 0, *,
@@ -89,6 +101,14 @@ def nutation_crossing(angle, axis="C", *, terminal: bool = True, direction: int 
     angle : float (rad) or angle Quantity, in [0, pi]
     axis : {"A", "B", "C", 0, 1, 2}
     terminal, direction : see :class:`Event`
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.events import nutation_crossing
+    >>> ev = nutation_crossing(np.radians(10.0), "C", terminal=False)
+    >>> ev.terminal, ev.direction
+    (False, 0)
     """
     try:
         if isinstance(angle, u.Quantity):
@@ -122,7 +142,19 @@ def nutation_crossing(angle, axis="C", *, terminal: bool = True, direction: int 
 
 def event_table(ephemeris) -> list[tuple]:
     """The events recorded in an ephemeris: ``[(time_s, name), ...]`` in time order,
-    or ``(time_s, name, body_index)`` for a batch."""
+    or ``(time_s, name, body_index)`` for a batch.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> from attitude.propagation.events import Event, event_table
+    >>> half = Event(lambda t, q, w, b: t - 500.0, terminal=False, name="half")
+    >>> event_table(att.propagate(body, state, [0.0, 1000.0], events=half))
+    [(500.0, 'half')]
+    """
     ds = ephemeris.dataset if hasattr(ephemeris, "dataset") else ephemeris
     if "event_time" not in ds.variables:
         return []
