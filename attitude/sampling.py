@@ -216,6 +216,13 @@ def tumbling_state(angular_momentum_ra, angular_momentum_dec, energy_ratio, rati
     -------
     moments (N, 3), quaternion (N, 4) principal -> inertial, omega (N, 3) principal-frame
     rates (rad/s), invalid ``{index: reason}``.
+
+    Examples
+    --------
+    >>> from attitude.sampling import tumbling_state
+    >>> m, q, w, bad = tumbling_state(4.36, -1.31, 1.024, 0.61, 0.965, 98568.0)
+    >>> m.round(3).tolist(), bad
+    ([[0.61, 0.965, 1.0]], {})
     """
     args = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, dtype=float)) for a in (
         angular_momentum_ra, angular_momentum_dec, energy_ratio, ratio_a, ratio_b,
@@ -269,6 +276,14 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
 
     Returns moments (N, 3), quaternion (N, 4) principal -> inertial, omega (N, 3) and
     invalid ``{index: reason}``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.sampling import spin_state
+    >>> m, q, w, bad = spin_state(0.0, np.pi / 2, 2 * np.pi / 3600, 0.8, 0.9)
+    >>> w.round(6).tolist()                          # one turn an hour about C
+    [[0.0, 0.0, 0.001745]]
     """
     ra, dec, rate, ra_, rb, psi, mc = np.broadcast_arrays(*(np.atleast_1d(np.asarray(
         a, dtype=float)) for a in (spin_ra, spin_dec, spin_rate, ratio_a, ratio_b,

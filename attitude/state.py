@@ -81,7 +81,17 @@ def direction_frame(ra, dec) -> np.ndarray:
     whose z axis points to right ascension ``ra``, declination ``dec`` (rad) and whose x
     axis is the node ``z_inertial x n`` of that direction (the inertial y axis at a
     pole).  The frame of a spin-axis state and of the angular momentum of a sampled
-    tumbler."""
+    tumbler.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.state import direction_frame
+    >>> direction_frame(0.0, 0.0).round(12) + 0.0    # z toward RA 0, Dec 0; x the node
+    array([[0., 0., 1.],
+           [1., 0., 0.],
+           [0., 1., 0.]])
+    """
     n = np.stack([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)], axis=-1)
     node = np.cross([0.0, 0.0, 1.0], n)
     norm = np.linalg.norm(node, axis=-1, keepdims=True)

@@ -29,7 +29,22 @@ def diagnose_ensemble(ensemble: Ensemble) -> xr.Dataset:
     :func:`attitude.propagation.torquefree.diagnose_many`): a Dataset along ``body`` with
     ``regime``, the periods ``polhode precession rotation spin`` (s, NaN where absent),
     ``energy_ratio``, ``separatrix_distance``, ``nutation_min``/``nutation_max`` (rad) and
-    ``valid``."""
+    ``valid``.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     50, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0},
+    ...     sigma={"energy_ratio": 0.006})
+    >>> from attitude.statistics import diagnose_ensemble
+    >>> d = diagnose_ensemble(ens)
+    >>> d["precession"].sizes["body"], str(d["regime"].values[0])
+    (50, 'SAM')
+    """
     ok = ensemble.valid
     n = len(ensemble)
     units = {"polhode": "s", "precession": "s", "rotation": "s", "spin": "s",
@@ -54,7 +69,22 @@ def regime_fractions(source) -> dict[str, float]:
     :func:`diagnose_ensemble` or :func:`classify_ensemble`, or a batch
     :class:`~attitude.Ephemeris` (each body classified from its propagated motion by
     :func:`classify_ensemble`, which also sees regime changes under torques).  Bodies
-    that are invalid or could not be classified are left out."""
+    that are invalid or could not be classified are left out.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     50, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0},
+    ...     sigma={"energy_ratio": 0.006})
+    >>> from attitude.statistics import regime_fractions
+    >>> f = regime_fractions(ens)       # E/E0 scattered across the separatrix C/B = 1.036
+    >>> list(f), round(sum(f.values()), 12)
+    (['SAM', 'LAM'], 1.0)
+    """
     if isinstance(source, Ensemble):
         source = diagnose_ensemble(source)
     if isinstance(source, Ephemeris):
@@ -116,7 +146,22 @@ def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:
     """Quantiles of each period over the bodies that have it: a DataArray
     ``(period, quantile)`` in seconds, with the number of bodies that have each period
     as the coordinate ``bodies``.  ``source``: an :class:`Ensemble` or :func:`diagnose_ensemble`
-    output."""
+    output.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     50, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0},
+    ...     sigma={"energy_ratio": 0.006})
+    >>> from attitude.statistics import period_quantiles
+    >>> p = period_quantiles(ens)
+    >>> round(float(p.sel(period="precession", quantile=0.5)) / 3600, 1)      # hours
+    27.4
+    """
     d = diagnose_ensemble(source) if isinstance(source, Ensemble) else source
     keys = [k for k in ("polhode", "precession", "rotation", "spin")
             if np.isfinite(d[k].values).any()]
@@ -136,7 +181,23 @@ def attitude_spread(eph, nominal=0) -> xr.DataArray:
 
     ``nominal``: a body index of the batch (default 0, the nominal of
     :meth:`Ensemble.sample`) or a single-body :class:`~attitude.Ephemeris` on the same
-    times.  Lazy (dask) when the ephemeris is."""
+    times.  Lazy (dask) when the ephemeris is.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     50, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0},
+    ...     sigma={"energy_ratio": 0.006})
+    >>> from attitude.statistics import attitude_spread
+    >>> eph = att.propagate(ens, [0.0, 86400.0])
+    >>> spread = attitude_spread(eph)
+    >>> spread.dims, float(spread.isel(body=0).max())         # body 0 is the nominal
+    (('body', 'time'), 0.0)
+    """
     q = eph.dataset["quaternion"]
     if isinstance(nominal, Ephemeris):
         qn = nominal.dataset["quaternion"]
@@ -153,7 +214,22 @@ def attitude_spread(eph, nominal=0) -> xr.DataArray:
 
 def spread_quantiles(eph, q=(0.5, 0.9, 0.99), nominal=0) -> xr.DataArray:
     """Quantiles over the bodies of :func:`attitude_spread` against time: ``(quantile,
-    time)`` in rad (NaN bodies are skipped)."""
+    time)`` in rad (NaN bodies are skipped).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.sample(
+    ...     50, rng=1, epoch="2029-04-13",
+    ...     mean={"angular_momentum_ra": 4.36, "angular_momentum_dec": -1.31,
+    ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
+    ...           "precession_period": 98568.0},
+    ...     sigma={"energy_ratio": 0.006})
+    >>> from attitude.statistics import spread_quantiles
+    >>> s = spread_quantiles(att.propagate(ens, [0.0, 86400.0]))
+    >>> s.dims
+    ('quantile', 'time')
+    """
     spread = attitude_spread(eph, nominal)
     if hasattr(spread.data, "dask"):   # all bodies of an epoch in one chunk, epochs split
         spread = spread.chunk({"body": -1, "time": "auto"})
