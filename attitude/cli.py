@@ -43,13 +43,13 @@ see docs/scenarios.md.  For example:
 The netCDF ephemeris goes to [output].netcdf (relative to the scenario file), or to -o.
 With --plot the figures (polhode, herpolhode, body axes, Euler angles, and the regime
 over time for runs with torques) are written as PNG next to it, e.g.
-scenarios/apophis_polhode.png (needs matplotlib: pip install 'attitude[plot]'):
+scenarios/apophis_polhode.png (needs matplotlib: pip install 'attitude-dynamics[plot]'):
 
   attitude run scenarios/apophis.toml --plot
 
 A scenario with an [ensemble] table propagates a population (a Monte Carlo cloud of
 states, or a table of bodies); --workers N runs it on a dask LocalCluster of N worker
-processes (pip install 'attitude[dask]'), writing the ephemeris chunk by chunk:
+processes (pip install 'attitude-dynamics[dask]'), writing the ephemeris chunk by chunk:
 
   attitude run scenarios/apophis_ensemble.toml --workers 2
 """
@@ -199,7 +199,7 @@ def _summary(result) -> str:
 def _rich_summary(result, console) -> None:
     """The summary as rich tables on ``console`` (a ``rich.console.Console``): the run
     (quantity, value), then the expectations (expected, tolerance, got, ok)."""
-    from rich.table import Table  # optional ('attitude[cli]')
+    from rich.table import Table  # optional ('attitude-dynamics[cli]')
     from rich.text import Text
 
     table = Table(title=Text(f"attitude run: {result.scenario.name}"), title_justify="left")
@@ -223,10 +223,10 @@ def _rich_summary(result, console) -> None:
 
 def _print_summary(result) -> None:
     """Rich tables on a terminal when ``rich`` is installed (pip install
-    'attitude[cli]'), else the plain-text summary (pipes, files, no rich)."""
+    'attitude-dynamics[cli]'), else the plain-text summary (pipes, files, no rich)."""
     if sys.stdout.isatty():
         try:
-            from rich.console import Console  # optional ('attitude[cli]')
+            from rich.console import Console  # optional ('attitude-dynamics[cli]')
         except ImportError:
             pass
         else:
@@ -244,10 +244,10 @@ def _plot_stem(args, result) -> Path:
 def _cmd_run(args) -> int:
     if args.plot:
         try:
-            import matplotlib  # noqa: F401  (optional: 'attitude[plot]')
+            import matplotlib  # noqa: F401  (optional: 'attitude-dynamics[plot]')
         except ImportError:
             print(f"attitude: error: {args.scenario}: --plot needs matplotlib; install it "
-                  "with pip install 'attitude[plot]'", file=sys.stderr)
+                  "with pip install 'attitude-dynamics[plot]'", file=sys.stderr)
             return EXIT_INPUT
     scenario = load_scenario(args.scenario)
     if args.workers is not None:
@@ -410,7 +410,7 @@ _CONVERT_HELP = """\
 Convert an ephemeris between netCDF (.nc) and CCSDS Attitude Ephemeris Messages
 (.aem: KVN text, .xml: XML), by file suffix, or write a SPICE C-kernel (.bc, type 3 with
 angular velocity, plus the SCLK, LSK, frame kernel and a meta-kernel beside it; needs
-pip install 'attitude[spice]').  AEM files are written in version 2.0 with
+pip install 'attitude-dynamics[spice]').  AEM files are written in version 2.0 with
 ATTITUDE_TYPE = QUATERNION/ANGVEL unless --attitude-type says otherwise; AEM versions 1.0
 and 2.0 are read.  See docs/formats.md.
 
@@ -507,7 +507,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="write the figures as PNG next to the output (needs matplotlib)")
     run.add_argument("--workers", type=int, default=None, metavar="N",
                      help="[ensemble] scenarios: run on a dask LocalCluster of N worker "
-                          "processes (needs pip install 'attitude[dask]')")
+                          "processes (needs pip install 'attitude-dynamics[dask]')")
     run.set_defaults(func=_cmd_run)
 
     chk = sub.add_parser("check", help="run scenarios and compare with their [expect] tables",

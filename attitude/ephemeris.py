@@ -12,6 +12,10 @@ variable                  dims                                          meaning
 ``kinetic_energy``        [body,] time                                  J
 ========================  ============================================  ==================
 
+``time`` is a CF time axis (:func:`time_attributes`: ``units = "seconds since <epoch>"``,
+``calendar``, ``standard_name``, ``axis``, ``time_scale``, ``reference_epoch``), so a CF
+reader shows dates, while the float seconds keep full precision.
+
 Global attributes: ``epoch`` (ISO 8601), ``time_scale``, ``frame``, ``inertia`` (9 floats,
 row-major, body frame), ``principal_moments``, ``quaternion_convention``,
 ``Conventions``, ``title``, ``history``, ``source``.  A batch (leading ``body``
@@ -21,6 +25,7 @@ dimension) carries ``inertia`` and ``principal_moments`` as per-body variables i
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from datetime import UTC, datetime
 from os import PathLike
@@ -36,21 +41,18 @@ from .body import RigidBody
 from .errors import EphemerisFormatError
 from .version import __version__
 
-__all__ = ["Ephemeris", "QUATERNION_CONVENTION"]
+__all__ = ["Ephemeris", "QUATERNION_CONVENTION", "TIME_CALENDAR", "time_attributes",
+           "time_from_file"]
 
 QUATERNION_CONVENTION = "scalar-last, body-to-inertial"
 _REQUIRED_VARIABLES = ("quaternion", "angular_velocity")
 _REQUIRED_ATTRS = ("epoch", "time_scale", "frame")
 
-#: Attributes of the ``time`` coordinate.  API.md fixes ``units = "s"`` (seconds since the
-#: ``epoch`` global attribute), which is a duration, not a CF reference-time unit
-#: (``s since ...``); the variable is therefore deliberately *not* declared a CF time axis
-#: (no ``axis = "T"``, no ``standard_name = "time"``: either makes CF 4.4 require a
-#: reference time in ``units``).  The reference epoch is carried in the ``epoch`` global
-#: attribute and repeated on the variable (``reference_epoch``, ``time_scale``).
-_TIME_ATTRS = {"units": "s", "long_name": "time elapsed since the reference epoch",
-               "comment": "seconds since the epoch given by the reference_epoch attribute "
-                          "(and the epoch global attribute), in the time_scale time scale"}
+#: Calendar of the CF time axis.  The time scales of an ephemeris (TDB, TT, TAI, ...) have
+#: days of exactly 86400 s and no leap seconds, which is what ``proleptic_gregorian`` means
+#: (CF 4.4.1); the scale itself is in the ``time_scale`` attribute (CF 1.10 has no
+#: attribute for it).
+TIME_CALENDAR = "proleptic_gregorian"
 
 #: String labels (``x y z w``, ``x y z``, body names).  In the netCDF file the labels of a
 #: dimension are a string-valued coordinate variable stored as a char array (CF 6.1;
@@ -105,6 +107,11 @@ class Ephemeris:
             raise EphemerisFormatError(
                 f"not an attitude ephemeris: missing {', '.join(missing)} (see the "
                 "ephemeris schema in the docs)")
+        if dataset["time"].dtype.kind not in "fiu":
+            raise EphemerisFormatError(
+                f"expected seconds since the epoch, got {dataset['time'].dtype} values (a "
+                "file opened with xarray's default decode_times=True? read it with "
+                "Ephemeris.from_netcdf)", key="time")
         if dataset.quaternion.sizes.get("quaternion_component") != 4:
             raise EphemerisFormatError("quaternion: expected a quaternion_component "
                                        "dimension of size 4 (x, y, z, w)")
@@ -301,6 +308,11 @@ class Ephemeris:
         except (OSError, ValueError) as exc:
             raise EphemerisFormatError(f"{path}: not a readable netCDF file ({exc})") from None
         ds = _from_file_dataset(ds)
+        if "time" in ds.coords and all(v in ds.variables for v in _REQUIRED_VARIABLES):
+            try:                             # (else the schema check names what is missing)
+                ds = time_from_file(ds)
+            except EphemerisFormatError as exc:
+                raise EphemerisFormatError(exc.reason, key=exc.key, path=path) from None
         return cls(ds)
 
 
@@ -388,9 +400,7 @@ def build_dataset(time, q, w, L, E, *, inertia, moments, names, single, epoch, f
                 "long_name": "rotational kinetic energy", "units": "J"}),
         },
         coords={
-            "time": ("time", np.asarray(time, dtype=float),
-                     _TIME_ATTRS | {"reference_epoch": attrs["epoch"],
-                                    "time_scale": attrs["time_scale"]}),
+            "time": ("time", np.asarray(time, dtype=float), time_attributes(epoch)),
             "quaternion_component": ("quaternion_component", ["x", "y", "z", "w"],
                                      _LABEL_ATTRS["quaternion_component"]),
             "axis": ("axis", ["x", "y", "z"], _LABEL_ATTRS["axis"]),
@@ -410,6 +420,129 @@ def build_dataset(time, q, w, L, E, *, inertia, moments, names, single, epoch, f
     for name, var in (extra_vars or {}).items():
         ds[name] = var
     return ds
+
+
+def time_attributes(epoch: Time) -> dict[str, str]:
+    """CF attributes of the ``time`` coordinate, seconds since ``epoch``: a CF time axis.
+
+    ``units`` names the reference time to the nanosecond, ``calendar`` is
+    :data:`TIME_CALENDAR`, and the time scale, which CF 1.10 cannot express, is in
+    ``time_scale``; ``reference_epoch`` repeats the epoch (ISO 8601, nanoseconds, as the
+    ``epoch`` global attribute) for readers that do not parse ``units``.  The values are
+    elapsed SI seconds: for an epoch in UTC, the dates a CF reader shows (its calendar has
+    no leap seconds) run ahead of UTC by one second per leap second inserted between the
+    epoch and the sample; :attr:`Ephemeris.times` counts them.
+
+    Parameters
+    ----------
+    epoch : astropy Time
+        The reference epoch, in the time scale of the ephemeris.
+
+    Returns
+    -------
+    dict of str
+        ``standard_name``, ``long_name``, ``axis``, ``units``, ``calendar``,
+        ``time_scale``, ``reference_epoch``, ``comment``.
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> attrs = time_attributes(Time("2030-01-01T12:00:00.5", scale="tdb"))
+    >>> attrs["units"]
+    'seconds since 2030-01-01T12:00:00.500000000'
+    >>> attrs["standard_name"], attrs["axis"], attrs["calendar"], attrs["time_scale"]
+    ('time', 'T', 'proleptic_gregorian', 'TDB')
+    """
+    iso, scale = _isot9(epoch), epoch.scale.upper()
+    return {
+        "standard_name": "time",
+        "long_name": f"time ({scale})",
+        "axis": "T",
+        "units": f"seconds since {iso}",
+        "calendar": TIME_CALENDAR,
+        "time_scale": scale,
+        "reference_epoch": iso,
+        "comment": f"elapsed SI seconds since {iso} {scale} (reference_epoch, in the "
+                   "time_scale time scale); the calendar has no leap seconds: in UTC, dates "
+                   "run ahead by the leap seconds inserted after the epoch",
+    }
+
+
+#: Units a file's ``time`` may have (``<unit> since <reference time>``), in seconds.
+_SECONDS_PER = {**dict.fromkeys(("s", "sec", "secs", "second", "seconds"), 1.0),
+                **dict.fromkeys(("min", "mins", "minute", "minutes"), 60.0),
+                **dict.fromkeys(("h", "hr", "hrs", "hour", "hours"), 3600.0),
+                **dict.fromkeys(("d", "day", "days"), 86400.0)}
+_SINCE = re.compile(r"^\s*(\w+)\s+since\s+(.+?)\s*$", re.IGNORECASE)
+
+
+def time_from_file(ds: xr.Dataset) -> xr.Dataset:
+    """The in-memory ``time`` coordinate (float seconds since the ``epoch`` global
+    attribute, with :func:`time_attributes`) from a file's, read with
+    ``decode_times=False``.
+
+    Reads the CF time axis (``units = "seconds since <epoch>"``: the values are kept as
+    they are, to the last bit), the ``units = "s"`` of attitude 0.1.0 (seconds since the
+    ``epoch`` global attribute), and other CF reference-time units (``days since ...``),
+    scaled to seconds and shifted to the epoch.  A file without an ``epoch`` attribute
+    takes the reference time of ``units``.
+
+    Raises
+    ------
+    EphemerisFormatError
+        ``time`` decoded to dates, units that are not a time since a reference time, no
+        time scale, or an unreadable epoch.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset(coords={"time": ("time", np.array([0.0, 0.5]), {
+    ...     "units": "days since 2030-01-01 00:00:00"})}, attrs={"time_scale": "TDB",
+    ...     "epoch": "2030-01-01T06:00:00"})
+    >>> time_from_file(ds).time.values.tolist()
+    [-21600.0, 21600.0]
+    """
+    time = ds["time"]
+    if time.dtype.kind not in "fiu":
+        raise EphemerisFormatError(f"expected seconds since the epoch, got {time.dtype} "
+                                   "values (a file opened with decode_times=True? use "
+                                   "Ephemeris.from_netcdf)", key="time")
+    units = str(time.attrs.get("units", "")).strip()
+    if units == "s":                        # attitude 0.1.0: seconds since the epoch attr
+        factor, ref = 1.0, None
+    else:
+        match = _SINCE.match(units)
+        if not match or match.group(1).lower() not in _SECONDS_PER:
+            raise EphemerisFormatError(f"{units!r} is not a time since a "
+                                       "reference epoch (expected 'seconds since <ISO 8601 "
+                                       "epoch>')", key="time.units")
+        factor, ref = _SECONDS_PER[match.group(1).lower()], match.group(2)
+    scale = str(ds.attrs.get("time_scale") or time.attrs.get("time_scale") or "")
+    if not scale:
+        raise EphemerisFormatError("attribute time_scale is missing (e.g. TDB, UTC)",
+                                   key="time_scale")
+    epoch = _parse_epoch(ds.attrs.get("epoch") or time.attrs.get("reference_epoch") or ref,
+                         scale, "epoch")
+    values = np.asarray(time.values, dtype=float)
+    if ref is not None:
+        offset = float((_parse_epoch(ref, scale, "time.units") - epoch).to_value("s"))
+        if factor != 1.0 or abs(offset) >= 0.5e-9:   # same epoch to the ns: values as they are
+            values = values * factor + offset
+    ds = ds.assign_coords(time=("time", values, {**time.attrs, **time_attributes(epoch)}))
+    ds.attrs.setdefault("epoch", _isot9(epoch))
+    ds.attrs.setdefault("time_scale", scale.upper())
+    return ds
+
+
+def _parse_epoch(text, scale: str, key: str) -> Time:
+    text = str(text).strip()
+    if text.endswith(("Z", " UTC", " GMT")) and scale.lower() == "utc":
+        text = text.removesuffix("Z").removesuffix(" UTC").removesuffix(" GMT")
+    try:
+        return Time(text, scale=scale.lower(), precision=9)
+    except ValueError as exc:
+        raise EphemerisFormatError(f"{text!r} is not an epoch in the {scale} time scale "
+                                   f"({str(exc).splitlines()[0]})", key=key) from None
 
 
 def _from_file_dataset(ds: xr.Dataset) -> xr.Dataset:

@@ -122,11 +122,11 @@ class ClassificationError(AttitudeError, ValueError):
 
 class MissingDependencyError(AttitudeError, ImportError):
     """An optional dependency is not installed; the message names the extra that
-    installs it (``pip install "attitude[spice]"``)."""
+    installs it (``pip install "attitude-dynamics[spice]"``)."""
 
 
 class PlotUnavailableError(MissingDependencyError):
-    """matplotlib is not installed (``pip install 'attitude[plot]'``)."""
+    """matplotlib is not installed (``pip install 'attitude-dynamics[plot]'``)."""
 
 
 class AttitudeWarning(UserWarning):

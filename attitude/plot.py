@@ -60,11 +60,12 @@ _MAX_POINTS = 4000
 def _pyplot_free_figure(**kw):
     """A Figure not registered with pyplot (no GUI, no global state): Agg canvas."""
     try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional ('attitude[plot]')
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: [plot] extra
         from matplotlib.figure import Figure
     except ImportError:
-        raise PlotUnavailableError("plots need matplotlib: pip install 'attitude[plot]' "
-                                   "(or pip install matplotlib)") from None
+        raise PlotUnavailableError("plots need matplotlib: pip install "
+                                   "'attitude-dynamics[plot]' (or pip install matplotlib)"
+                                   ) from None
     fig = Figure(**kw)
     FigureCanvasAgg(fig)
     return fig

@@ -743,7 +743,7 @@ def ensemble_summary(scenario: Scenario, eph) -> dict:
 def _compute(*objects):
     """Evaluate xarray objects in one pass (one dask graph when they are lazy)."""
     try:
-        import dask  # optional ('attitude[dask]')
+        import dask  # optional ('attitude-dynamics[dask]')
     except ImportError:
         return objects
     return dask.compute(*objects)

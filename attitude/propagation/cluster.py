@@ -4,7 +4,7 @@
 ``MALLOC_TRIM_THRESHOLD_``, which halves the kernels' throughput) and a ``Client`` to it;
 :func:`shared_local_client` keeps one for the session (``client="local"``);
 :func:`client_for` connects to a scheduler address.  dask and distributed are optional
-(``pip install "attitude[dask]"``): they are imported where they are used.
+(``pip install "attitude-dynamics[dask]"``): they are imported where they are used.
 """
 
 from __future__ import annotations
@@ -51,10 +51,10 @@ def client_for(address: str):
     True
     """
     try:
-        from distributed import Client, default_client  # optional ('attitude[dask]')
+        from distributed import Client, default_client  # optional ('attitude-dynamics[dask]')
     except ImportError:
         raise AttitudeError("client: a scheduler address needs the optional 'distributed' "
-                            "package: pip install 'attitude[dask]'") from None
+                            "package: pip install 'attitude-dynamics[dask]'") from None
     try:
         current = default_client()
         if current.scheduler.address == address:
@@ -85,10 +85,10 @@ def local_cluster(n_workers: int = 2, *, threads_per_worker: int = 1, **kwargs):
     1
     """
     try:
-        from distributed import Client, LocalCluster  # optional ('attitude[dask]')
+        from distributed import Client, LocalCluster  # optional ('attitude-dynamics[dask]')
     except ImportError:
         raise AttitudeError("dask scale-out needs the optional 'distributed' package: "
-                            "pip install 'attitude[dask]'") from None
+                            "pip install 'attitude-dynamics[dask]'") from None
     kwargs.setdefault("dashboard_address", ":0")     # any free port: no clash, no warning
     kwargs.setdefault("processes", True)
     with _glibc_mmap_threshold():
@@ -117,7 +117,7 @@ def _glibc_mmap_threshold():
     afresh: measured, more than half of a worker's CPU time in the kernel and half the
     throughput of one plain process (``benchmarks/ensemble.py``).  A value the user set
     (other than dask's default) is kept."""
-    import dask  # optional dependency ('attitude[dask]')
+    import dask  # optional dependency ('attitude-dynamics[dask]')
 
     key = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
     if str(dask.config.get(key, None)) != _DASK_TRIM:
