@@ -37,6 +37,7 @@ from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
 from .propagation.torquefree import diagnose
+from .spinorbit import SpinOrbit
 from .state import INERTIAL_FRAMES, AttitudeState
 from .version import __version__
 
@@ -54,6 +55,7 @@ __all__ = [
     "nutation_crossing",
     "event_table",
     "KeplerOrbit",
+    "SpinOrbit",
     "torques",
     "propagate",
     "diagnose",
