@@ -283,7 +283,9 @@ def periodic_orbit(omega0: float, e: float, p: int, q: int, *, angle: float | No
     if q < 1 or p < 0:
         raise SpinOrbitError(f"expected p >= 0, q >= 1, got {p}:{q}", key="resonance")
     if angle is None:
-        angle = 0.0 if cayley_coefficient(p / q, e) >= 0 else math.pi / 2
+        half_integer = (2 * p) % q == 0
+        angle = 0.0 if not half_integer or cayley_coefficient(p / q, e) >= 0 \
+            else math.pi / 2
     if rate is None:
         rate = p / q
         if p == q and abs(omega0**2 - 1.0) > 1e-6:
