@@ -527,7 +527,8 @@ def _cmd_section(args) -> int:
     elapsed = time.perf_counter() - start
     written = [spinorbit_section.write_section(sec, target)]
     if args.plot:
-        fig = spinorbit_section.section_figure(sec, resonances=so.resonances())
+        fig = spinorbit_section.section_figure(
+            sec, centres=spinorbit_section.island_centres(so))
         png = target.with_suffix(".png")
         written.append(write_atomically(png, lambda tmp: fig.savefig(tmp, format="png",
                                                                       dpi=150)))

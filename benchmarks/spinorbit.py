@@ -15,9 +15,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
 import attitude as att
-from attitude.spinorbit.section import section_figure, write_section
+from attitude.spinorbit import periodic_orbit
+from attitude.spinorbit.section import island_centres, section_figure, write_section
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -60,7 +62,26 @@ def main(argv=None) -> None:
               "chaotic")
     if args.nc:
         print("wrote", write_section(sec, args.nc))
-    fig = section_figure(sec, resonances=so.resonances(max_rate=3.0), title=(
+    # the figure adds a few orbits around the p:q periodic orbits that exist and are
+    # stable in the plane (a uniform grid misses the small islands); not timed above
+    seeds_a, seeds_r = [], []
+    print("p:q periodic orbits at periapsis (planar; |trace| < 2 is an island):")
+    for p, q in ((1, 2), (1, 1), (3, 2), (2, 1), (5, 2)):
+        try:
+            th, w, mono = periodic_orbit(so.omega0, so.e, p, q)
+        except att.SpinOrbitError:
+            print(f"  {p}:{q}: no periodic orbit found from the resonance centre")
+            continue
+        tr = float(np.trace(mono))
+        print(f"  {p}:{q}: angle {math.degrees(th):6.1f} deg, rate {w:.4f}, "
+              f"trace {tr:+.3f} ({'island' if abs(tr) < 2 else 'unstable'})")
+        if abs(tr) < 2:
+            for dw in (0.01, 0.03, 0.06):
+                seeds_a.append(th)
+                seeds_r.append(w + dw)
+    islands = so.surface_of_section(seeds_a, seeds_r, n_orbits=args.orbits)
+    both = xr.concat([sec, islands], dim="initial")
+    fig = section_figure(both, centres=island_centres(so), title=(
         f"Hyperion (e = 0.1, omega0 = 0.89): {args.orbits} orbits, "
         f"{int(chaotic.sum())}/{chaotic.size} chaotic (grey)"))
     fig.savefig(args.figure, dpi=150)

@@ -39,10 +39,11 @@ from ..quantities import to_si
 from ..torques import GravityGradient, SumTorque
 from .libration import long_axis_angle, measure_libration
 from .model import SpinOrbit
+from .planar import periodic_orbit
 
 __all__ = ["EXPECT_KEYS", "SECTION_KEYS", "SectionConfig", "parse_expect",
            "parse_section", "spin_orbit_of", "expectation_values", "mean_spin_resonance",
-           "run_section", "write_section", "section_figure"]
+           "run_section", "write_section", "island_centres", "section_figure"]
 
 #: ``[expect]`` keys owned by the spin-orbit wing.
 EXPECT_KEYS = ("libration_amplitude", "resonance")
@@ -304,9 +305,33 @@ def write_section(section: xr.Dataset, path) -> Path:
     return write_atomically(path, lambda tmp: ds.to_netcdf(tmp))
 
 
-def section_figure(section: xr.Dataset, *, title: str | None = None, resonances=()):
+def island_centres(so: SpinOrbit, max_rate: float = 3.0) -> list[tuple[str, float, float,
+                                                                         float]]:
+    """The p:q periodic orbits at periapsis, ``(name, angle, rate, trace)``, for each
+    resonance of :meth:`SpinOrbit.resonances` whose periodic orbit is found from the
+    resonance centre (``|trace| < 2``: an island; else unstable, in a chaotic zone).
+
+    Examples
+    --------
+    >>> import attitude as att
+    >>> so = SpinOrbit.from_omega0(0.89, att.KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+    >>> [(name, abs(tr) < 2) for name, _, _, tr in island_centres(so, 2.0)]
+    [('1:2', True), ('1:1', True), ('2:1', True)]
+    """
+    out = []
+    for r in so.resonances(max_rate=max_rate):
+        try:
+            th, w, mono = periodic_orbit(so.omega0, so.e, r.p, r.q)
+        except SpinOrbitError:
+            continue
+        out.append((r.name, th, w, float(np.trace(mono))))
+    return out
+
+
+def section_figure(section: xr.Dataset, *, title: str | None = None, centres=()):
     """The surface of section as a matplotlib Figure: regular orbits in colour, chaotic
-    ones in grey, the resonance centres marked.
+    ones in grey, the p:q periodic orbits of ``centres`` (:func:`island_centres`) marked
+    (filled: an island, open: unstable).
 
     Raises
     ------
@@ -334,9 +359,10 @@ def section_figure(section: xr.Dataset, *, title: str | None = None, resonances=
     for k, i in enumerate(reg):
         ax.plot(ang[i], rate[i], ".", ms=1.0, color=colours[k % len(colours)],
                 rasterized=True)
-    for r in resonances:
-        ax.axhline(r.rate, color="k", lw=0.4, ls=":")
-        ax.text(91, r.rate, r.name, va="center", fontsize=8)
+    for name, th, w, trace in centres:
+        x = math.degrees(th - math.pi * math.floor(th / math.pi + 0.5))
+        ax.plot([x], [w], "o", ms=5, mec="k", mfc="k" if abs(trace) < 2 else "none")
+        ax.annotate(name, (x, w), xytext=(4, 4), textcoords="offset points", fontsize=9)
     ax.set_xlim(-90, 90)
     ax.set_xlabel("angle of the long axis from periapsis at periapsis (deg)")
     ax.set_ylabel("spin rate / mean motion at periapsis")
