@@ -169,8 +169,18 @@ class SpinOrbit:
 
     def despinning_time(self, *, spin_rate, primary_mass, mass, radius, **kwargs) -> float:
         """Tidal despinning time (s), :func:`attitude.spinorbit.despinning_time` with this
-        orbit's semi-major axis and ``moment_factor = C / (m R^2)`` when ``mass`` and
-        ``radius`` are given."""
+        orbit's semi-major axis and ``moment_factor = C / (m R^2)`` (at most 2/3).
+
+        Examples
+        --------
+        >>> import attitude as att
+        >>> so = SpinOrbit(att.RigidBody.from_principal_moments([4.6e23, 5.4e23, 6.4e23]),
+        ...                att.KeplerOrbit(mu=4.282837e13, a=9.376e6, e=0.0151))
+        >>> t = so.despinning_time(spin_rate="2 rev/d", primary_mass=6.417e23,
+        ...                        mass=1.0659e16, radius=11100.0)
+        >>> f"{t / 3.15576e7:.2g} yr"
+        '2.3e+04 yr'
+        """
         m = float(mass)
         kwargs.setdefault("moment_factor",
                           min(float(self.body.principal_moments[2]) / (m * float(radius)**2),
@@ -197,6 +207,14 @@ class SpinOrbit:
             Epoch of ``t = 0`` (TDB when a string).
         frame : str
             Inertial frame label of the orbit's elements.
+
+        Examples
+        --------
+        >>> import attitude as att
+        >>> so = SpinOrbit.from_omega0(0.5, att.KeplerOrbit(mu=1.0, a=1.0))
+        >>> s = so.initial_state(0.0, 1.0)
+        >>> s.omega_body.round(12).tolist()          # spin n about C (the body z axis)
+        [0.0, 0.0, 1.0]
         """
         P, Q, W = orbit_basis(self.orbit)
         to_inertial = Rotation.from_matrix(np.stack([P, Q, W], axis=1))
@@ -214,6 +232,13 @@ class SpinOrbit:
 
         Found in the planar problem (:func:`attitude.spinorbit.planar.periodic_orbit`)
         and advanced from periapsis to the epoch's mean anomaly.
+
+        Examples
+        --------
+        >>> import attitude as att
+        >>> so = SpinOrbit.from_omega0(0.6, att.KeplerOrbit(mu=1.0, a=1.0, e=0.01))
+        >>> round(float(so.locked_state().omega_body[2]), 4)   # below n at periapsis
+        0.9886
         """
         th, w, _ = periodic_orbit(self.omega0, self.e, p, q)
         M0 = math.fmod(self.orbit.mean_anomaly, TWO_PI * q)
@@ -233,6 +258,14 @@ class SpinOrbit:
         state : AttitudeState, optional
         rtol : float
             Relative tolerance of DOP853.
+
+        Examples
+        --------
+        >>> import attitude as att
+        >>> so = SpinOrbit.from_omega0(0.6, att.KeplerOrbit(mu=1.0, a=1.0, e=0.0))
+        >>> eph = so.propagate([0.0, math.pi])                # half an orbit, locked
+        >>> bool(abs(eph.rotation[-1].as_euler("zyx")[0]) > 3.14159)
+        True
         """
         state = self.locked_state() if state is None else state
         return propagate(self.body, state, times, torques=[self.torque()],
@@ -253,6 +286,14 @@ class SpinOrbit:
         ------
         SpinOrbitError
             When the periodic orbit is not found.
+
+        Examples
+        --------
+        >>> import attitude as att
+        >>> so = SpinOrbit.from_omega0(0.89, att.KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+        >>> st = so.stability()                         # Hyperion (WPM 1984)
+        >>> st.planar_stable, st.stable
+        (True, False)
         """
         if self.orbit.mean_anomaly != 0.0:
             orbit = KeplerOrbit(mu=self.orbit.mu, a=self.orbit.a, e=self.orbit.e,

@@ -120,6 +120,14 @@ def spin_orbit_of(body, torques) -> SpinOrbit:
     ------
     SpinOrbitError
         When there is no gravity-gradient torque on a :class:`KeplerOrbit`.
+
+    Examples
+    --------
+    >>> import attitude as att
+    >>> body = att.RigidBody.from_principal_moments([0.5, 0.8, 1.0])
+    >>> gg = GravityGradient(orbit=KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+    >>> round(spin_orbit_of(body, [gg]).omega0, 4)
+    0.9487
     """
     terms = []
     for t in torques or ():
@@ -143,6 +151,13 @@ def mean_spin_resonance(ephemeris, orbit: KeplerOrbit, *, max_q: int = 2,
     Returns
     -------
     name, mean_rate : str, float
+
+    Examples
+    --------
+    >>> so = SpinOrbit.from_omega0(0.5, KeplerOrbit(mu=1.0, a=1.0, e=0.0))
+    >>> eph = so.propagate(np.linspace(0.0, 4 * math.pi, 65), so.initial_state(0.0, 1.5))
+    >>> mean_spin_resonance(eph, so.orbit)[0]       # a circular orbit: no 3:2 lock
+    'none'
     """
     t = np.asarray(ephemeris.time, dtype=float)
     theta = long_axis_angle(ephemeris.dataset["quaternion"].values, ephemeris.body, orbit)
@@ -288,14 +303,33 @@ def parse_section(table, folder: Path | None = None, fail: Fail = _fail_default
 
 
 def run_section(so: SpinOrbit, config: SectionConfig) -> xr.Dataset:
-    """The surface of section of a ``[section]`` table (:meth:`SpinOrbit.surface_of_section`)."""
+    """The surface of section of a ``[section]`` table (:meth:`SpinOrbit.surface_of_section`).
+
+    Examples
+    --------
+    >>> so = SpinOrbit.from_omega0(0.89, KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+    >>> cfg = parse_section({"angles": [0.0], "rates": [3.3], "n_orbits": 10})
+    >>> run_section(so, cfg)["chaotic"].values.tolist()
+    [False]
+    """
     return so.surface_of_section(config.angles, config.rates, config.n_orbits,
                                  lyapunov=config.lyapunov, rtol=config.rtol,
                                  seed=config.seed)
 
 
 def write_section(section: xr.Dataset, path) -> Path:
-    """Write a surface of section to netCDF atomically (temporary file + rename)."""
+    """Write a surface of section to netCDF atomically (temporary file + rename); the
+    boolean ``chaotic`` is stored as a 0/1 flag (CF ``flag_values``).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> so = SpinOrbit.from_omega0(0.89, KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+    >>> sec = so.surface_of_section([0.0], [3.3], n_orbits=3)
+    >>> path = write_section(sec, Path(tempfile.mkdtemp()) / "s.nc")
+    >>> xr.open_dataset(path).sizes["orbit"]
+    4
+    """
     path = Path(path)
     ds = section.copy()
     if "chaotic" in ds:
