@@ -7,6 +7,7 @@ scenario, unreadable file), 3 the propagation itself failed.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -517,8 +518,7 @@ def _cmd_section(args) -> int:
         if args.orbits < 1:
             print("attitude: error: --orbits: must be at least 1", file=sys.stderr)
             return EXIT_INPUT
-        cfg = spinorbit_section.SectionConfig(cfg.angles, cfg.rates, args.orbits,
-                                              cfg.lyapunov, cfg.rtol, cfg.seed, cfg.netcdf)
+        cfg = dataclasses.replace(cfg, n_orbits=args.orbits)
     target = Path(args.output) if args.output else (
         cfg.netcdf or Path(args.scenario).with_suffix(".section.nc"))
     so = spinorbit_section.spin_orbit_of(scenario.body, scenario.torques)

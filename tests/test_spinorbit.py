@@ -183,6 +183,16 @@ def test_circular_orbit_control_has_no_forced_libration():
     assert mean_spin_resonance(eph, orbit)[0] == "1:1"
 
 
+def test_a_mercury_like_3_2_lock_is_recognised():
+    """The 3:2 periodic orbit (planar Newton) propagated in 3-D keeps a mean spin of 1.5 n
+    and a librating angle theta - 1.5 M: the [expect] resonance reads "3:2"."""
+    orbit = att.KeplerOrbit(mu=1.0, a=1.0, e=0.2)
+    so = att.SpinOrbit.from_omega0(0.2, orbit)
+    eph = so.propagate(np.linspace(0.0, 4 * math.pi, 65), so.locked_state(3, 2))
+    name, rate = mean_spin_resonance(eph, orbit)
+    assert name == "3:2" and rate == pytest.approx(1.5, abs=1e-9)
+
+
 def test_linear_theory_diverges_at_resonance():
     with pytest.raises(SpinOrbitError, match="omega0 = n"):
         forced_libration_amplitude(1.0, 0.01)

@@ -92,7 +92,7 @@ def parse_expect(key: str, spec, fail: Fail = _fail_default) -> dict:
             to_si(f"1 {unit}", "rad", name="unit")
             value = float(spec["value"])
             tol = float(spec.get("rel_tol", spec.get("abs_tol")))
-        except (KeyError, TypeError, ValueError, Exception) as exc:  # noqa: BLE001
+        except (KeyError, TypeError, ValueError) as exc:
             raise fail(where, f"expected a numeric value and tolerance and an angle unit "
                               f"({exc})") from None
         if not (math.isfinite(value) and value >= 0 and math.isfinite(tol) and tol >= 0):
