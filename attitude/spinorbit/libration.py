@@ -105,7 +105,7 @@ def long_axis_angle(quaternion, body, orbit: KeplerOrbit) -> np.ndarray:
     return np.unwrap(np.arctan2(a @ Q, a @ P))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LibrationMeasurement:
     """The spectrum of the libration in longitude at the harmonics of the orbit.
 

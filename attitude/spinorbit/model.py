@@ -35,7 +35,7 @@ from .tides import despinning_time
 __all__ = ["SpinOrbit", "Stability"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Stability:
     """Linear stability of a p:q periodic orbit, planar and in 3-D.
 
@@ -72,7 +72,7 @@ class Stability:
         return float(np.max(np.abs(self.multipliers)) ** (1.0 / self.q))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SpinOrbit:
     """A rigid body on a Keplerian orbit about its primary: the spin-orbit problem.
 

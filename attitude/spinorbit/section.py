@@ -209,7 +209,7 @@ def expectation_values(scenario, ephemeris) -> dict:
 
 # --- [section] --------------------------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SectionConfig:
     """A parsed ``[section]`` table (angles in rad, rates in units of n)."""
 
