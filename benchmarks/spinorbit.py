@@ -84,7 +84,7 @@ def main(argv=None) -> None:
     fig = section_figure(both, centres=island_centres(so), title=(
         f"Hyperion (e = 0.1, omega0 = 0.89): {args.orbits} orbits, "
         f"{int(chaotic.sum())}/{chaotic.size} chaotic (grey)"))
-    fig.savefig(args.figure, dpi=150)
+    fig.savefig(args.figure, dpi=100)
     print("wrote", args.figure)
 
 
