@@ -263,16 +263,9 @@ def load_scenario(path: str | Path) -> Scenario:
     expect = _parse_expect(r, r.table(doc, "expect", required=False))
     if ensemble is None and any(e["key"].startswith("regime_fractions") for e in expect):
         raise r.fail("expect.regime_fractions", "only for scenarios with an [ensemble] table")
-    # --- spin-orbit wing (issue 19) ---
-    section = None
-    if "section" in doc:
-        section = spinorbit_section.parse_section(doc["section"], path.parent, r.fail)
-    if any(e["key"] in spinorbit_section.EXPECT_KEYS for e in expect) or section:
-        try:
-            spinorbit_section.spin_orbit_of(body, torques)
-        except AttitudeError as exc:
-            raise r.fail("torques", exc.reason) from None
-    # --- end spin-orbit ---
+    section = spinorbit_section.load_tables(   # spin-orbit wing: [section], its [expect]
+        doc, body=body, torques=torques, expect=expect, ensemble=ensemble,
+        folder=path.parent, fail=r.fail)
     return Scenario(path=path, name=name, description=description, body=body, state=state,
                     duration=duration, step=step, method=method, rtol=rtol,
                     integrator_step=integrator_step, order=order, torques=tuple(torques),

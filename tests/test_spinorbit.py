@@ -39,6 +39,7 @@ from attitude.spinorbit import (
 )
 from attitude.spinorbit.section import (
     expectation_values,
+    load_tables,
     mean_spin_resonance,
     parse_expect,
     parse_section,
@@ -340,6 +341,12 @@ def test_cli_section_bad_input_exits_2(tmp_path, capsys):
     bad.write_text(bad.read_text().replace("n_orbits = 5", "n_orbits = -5"))
     assert main(["section", str(bad)]) == 2
     assert "section.n_orbits" in capsys.readouterr().err
+
+
+def test_spin_orbit_expectations_are_not_for_ensembles():
+    with pytest.raises(SpinOrbitError, match="expect.resonance: not for"):
+        load_tables({}, body=None, torques=(), expect=({"key": "resonance"},),
+                    ensemble=object())
 
 
 def test_spin_orbit_expectations_need_a_keplerian_gravity_gradient(tmp_path):

@@ -42,8 +42,9 @@ from .model import SpinOrbit
 from .planar import periodic_orbit
 
 __all__ = ["EXPECT_KEYS", "SECTION_KEYS", "SectionConfig", "parse_expect",
-           "parse_section", "spin_orbit_of", "expectation_values", "mean_spin_resonance",
-           "run_section", "write_section", "island_centres", "section_figure"]
+           "parse_section", "load_tables", "spin_orbit_of", "expectation_values",
+           "mean_spin_resonance", "run_section", "write_section", "island_centres",
+           "section_figure"]
 
 #: ``[expect]`` keys owned by the spin-orbit wing.
 EXPECT_KEYS = ("libration_amplitude", "resonance")
@@ -300,6 +301,48 @@ def parse_section(table, folder: Path | None = None, fail: Fail = _fail_default
     path = None if netcdf is None else (Path(folder or ".") / netcdf)
     return SectionConfig(angles=angles, rates=rates, n_orbits=n_orbits, lyapunov=lyap,
                          rtol=rtol, seed=seed, netcdf=path)
+
+
+def load_tables(doc: Mapping, *, body, torques, expect, ensemble=None,
+                folder: Path | None = None, fail: Fail = _fail_default
+                ) -> SectionConfig | None:
+    """The scenario reader's hook: parse the ``[section]`` table of a TOML document and
+    check that a scenario with a ``[section]`` or a spin-orbit ``[expect]`` key is a
+    spin-orbit problem (one body, one gravity-gradient torque on a Keplerian orbit).
+
+    Parameters
+    ----------
+    doc : mapping
+        The whole TOML document.
+    body, torques, expect, ensemble
+        What the scenario reader built (``expect``: the parsed entries).
+    folder : Path
+        The scenario's folder (``netcdf`` is relative to it).
+    fail : callable
+        ``fail(key, message) -> Exception`` of the reader (names the file).
+
+    Returns
+    -------
+    SectionConfig or None
+
+    Examples
+    --------
+    >>> load_tables({}, body=None, torques=(), expect=()) is None
+    True
+    """
+    section = None
+    if "section" in doc:
+        section = parse_section(doc["section"], folder, fail)
+    keys = [e["key"] for e in expect if e["key"] in EXPECT_KEYS]
+    if keys and ensemble is not None:
+        raise fail(f"expect.{keys[0]}", "not for [ensemble] scenarios (one body on one "
+                                        "orbit)")
+    if keys or section is not None:
+        try:
+            spin_orbit_of(body, torques)
+        except SpinOrbitError as exc:
+            raise fail("torques", exc.reason) from None
+    return section
 
 
 def run_section(so: SpinOrbit, config: SectionConfig) -> xr.Dataset:
