@@ -45,6 +45,7 @@ from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
 from .propagation.torquefree import diagnose
+from .spinorbit import SpinOrbit
 from .state import INERTIAL_FRAMES, AttitudeState
 from .version import __version__
 
@@ -69,6 +70,7 @@ __all__ = [
     "PeriodObservations",
     "TLEOrbit",
     "IGRF",
+    "SpinOrbit",
     "torques",
     "propagate",
     "diagnose",

@@ -7,6 +7,7 @@ scenario, unreadable file), 3 the propagation itself failed.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -24,6 +25,7 @@ from .formats.spice import convert_to_ck
 from .plot import save_figures
 from .propagation.cluster import local_cluster
 from .scenario import load_scenario, run_scenario
+from .spinorbit import section as spinorbit_section  # attitude section (spin-orbit wing)
 from .statistics import classify_ensemble, regime_fractions
 from .version import __version__
 
@@ -86,7 +88,7 @@ def _expectation_cells(e: dict) -> tuple[str, str, str, str]:
     unit = f" {e['unit']}" if "unit" in e else ""
     if "tolerance" in e:
         expected, tolerance = f"{_number(e['expected'])}{unit}", f"+/- {e['tolerance']:.3g}{unit}"
-    elif e["key"] == "regime":
+    elif e["key"] in ("regime", "resonance"):        # resonance: the spin-orbit wing
         expected, tolerance = e["expected"], "exact"
     else:
         expected, tolerance = f"<= {e['expected']:.3g}", "upper bound"
@@ -490,6 +492,56 @@ def _classify_batch(eph, args) -> int:
     return EXIT_OK
 
 
+# --- attitude section (spin-orbit wing, issue 19) -------------------------------------
+
+_SECTION_HELP = """\
+Compute the surface of section of a spin-orbit scenario: the stroboscopic map at
+periapsis (angle of the long axis from periapsis, spin rate / mean motion) of the grid of
+initial conditions in its [section] table, for the body and the Keplerian orbit of its
+gravity_gradient torque, each trajectory classified regular or chaotic by the
+finite-time Lyapunov test.  Writes netCDF (dims initial, orbit) and, with --plot, a PNG.
+
+  attitude section scenarios/hyperion_section.toml -o section.nc --plot
+
+Exit codes: 0 written, 2 a malformed scenario or a missing [section] table.
+"""
+
+
+def _cmd_section(args) -> int:
+    scenario = load_scenario(args.scenario)
+    if scenario.section is None:
+        print(f"attitude: error: {args.scenario}: section: the scenario has no [section] "
+              "table (angles, rates, n_orbits)", file=sys.stderr)
+        return EXIT_INPUT
+    cfg = scenario.section
+    if args.orbits is not None:
+        if args.orbits < 1:
+            print("attitude: error: --orbits: must be at least 1", file=sys.stderr)
+            return EXIT_INPUT
+        cfg = dataclasses.replace(cfg, n_orbits=args.orbits)
+    target = Path(args.output) if args.output else (
+        cfg.netcdf or Path(args.scenario).with_suffix(".section.nc"))
+    so = spinorbit_section.spin_orbit_of(scenario.body, scenario.torques)
+    start = time.perf_counter()
+    sec = spinorbit_section.run_section(so, cfg)
+    elapsed = time.perf_counter() - start
+    written = [spinorbit_section.write_section(sec, target)]
+    if args.plot:
+        fig = spinorbit_section.section_figure(
+            sec, centres=spinorbit_section.island_centres(so))
+        png = target.with_suffix(".png")
+        written.append(write_atomically(png, lambda tmp: fig.savefig(tmp, format="png",
+                                                                      dpi=150)))
+    if not args.quiet:
+        chaotic = int(sec["chaotic"].sum()) if "chaotic" in sec else 0
+        print(f"{scenario.name}: {sec.sizes['initial']} initial conditions x "
+              f"{sec.sizes['orbit'] - 1} orbits in {elapsed:.1f} s; omega0 = "
+              f"{so.omega0:.4g}, e = {so.e:.4g}; chaotic: {chaotic}")
+        for path in written:
+            print(f"wrote {path}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="attitude", description=_MAIN_HELP,
@@ -544,6 +596,18 @@ def build_parser() -> argparse.ArgumentParser:
     conv.add_argument("--attitude-type", help="AEM ATTITUDE_TYPE (default QUATERNION/ANGVEL;"
                       " also QUATERNION, EULER_ANGLE, ...)")
     conv.set_defaults(func=_cmd_convert)
+
+    sec = sub.add_parser("section", help="spin-orbit surface of section of a scenario "
+                         "(netCDF, --plot for a PNG)", description=_SECTION_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    sec.add_argument("scenario", metavar="SCENARIO.toml", help="scenario with a [section] table")
+    sec.add_argument("-o", "--output", metavar="OUT.nc",
+                     help="netCDF path (default [section].netcdf or SCENARIO.section.nc)")
+    sec.add_argument("--orbits", type=int, default=None, metavar="N",
+                     help="override [section].n_orbits")
+    sec.add_argument("--plot", action="store_true", help="also write OUT.png (matplotlib)")
+    sec.add_argument("--quiet", action="store_true", help="print nothing on success")
+    sec.set_defaults(func=_cmd_section)
     return parser
 
 

@@ -31,6 +31,7 @@ __all__ = [
     "DiagnosticsError",
     "InsufficientDataError",
     "ClassificationError",
+    "SpinOrbitError",
     "MissingDependencyError",
     "PlotUnavailableError",
     "AttitudeWarning",
@@ -118,6 +119,12 @@ class InsufficientDataError(DiagnosticsError):
 class ClassificationError(AttitudeError, ValueError):
     """Arguments that make a classification impossible (bad thresholds, a chaos test
     without the torques, ...)."""
+
+
+class SpinOrbitError(AttitudeError, ValueError):
+    """A spin-orbit problem that cannot be set up or solved: an orbit that is not a
+    :class:`~attitude.orbit.KeplerOrbit`, a body without ``B > A``, a resonance whose
+    periodic orbit does not converge, a bad ``[section]`` table."""
 
 
 class MissingDependencyError(AttitudeError, ImportError):

@@ -42,6 +42,7 @@ from .regimes import PERIOD_KEYS, REGIMES
 from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
 from .sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
 from .sampling import MODELS
+from .spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
 from .state import AttitudeState, check_frame, spin_axis_quaternion
 from .torques import from_config
 
@@ -63,6 +64,7 @@ SCHEMA: dict[str, dict[str, Any]] = {
     "expect": dict,
     "ensemble": {"size": int, "seed": int, "model": str, "mean": dict, "sigma": dict,
                  "table": str, "chunk": int, "include_nominal": bool},
+    "section": dict,            # spin-orbit wing: checked by spinorbit.section.parse_section
 }
 _BODY_KINDS = ("principal_moments", "inertia", "shape", "parts")
 _PART_PLACEMENT = ("primitive", "offset", "orientation")
@@ -90,6 +92,8 @@ class Scenario:
     """An :class:`attitude.Ensemble` when the file has an ``[ensemble]`` table (``body``
     and ``state`` are then its nominal member: body 0, or the first valid one)."""
     chunk: int | None = None
+    section: Any = None
+    """The ``[section]`` table (:class:`attitude.spinorbit.section.SectionConfig`)."""
 
     @property
     def times(self) -> np.ndarray:
@@ -259,11 +263,14 @@ def load_scenario(path: str | Path) -> Scenario:
     expect = _parse_expect(r, r.table(doc, "expect", required=False))
     if ensemble is None and any(e["key"].startswith("regime_fractions") for e in expect):
         raise r.fail("expect.regime_fractions", "only for scenarios with an [ensemble] table")
+    section = spinorbit_section.load_tables(   # spin-orbit wing: [section], its [expect]
+        doc, body=body, torques=torques, expect=expect, ensemble=ensemble,
+        folder=path.parent, fail=r.fail)
     return Scenario(path=path, name=name, description=description, body=body, state=state,
                     duration=duration, step=step, method=method, rtol=rtol,
                     integrator_step=integrator_step, order=order, torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect,
-                    ensemble=ensemble, chunk=chunk)
+                    ensemble=ensemble, chunk=chunk, section=section)
 
 
 def _ensemble(r: _Reader, doc: dict, folder: Path):
@@ -669,7 +676,8 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
                        dataset)
     result.expectations.extend(check_expectations(
         scenario, result.regime, result.periods, conservation, diagnosis=diagnosis,
-        dataset=dataset))
+        dataset=dataset,
+        spinorbit=spinorbit_section.expectation_values(scenario, eph)))  # spin-orbit wing
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
     if target is not None and write_outputs:
         result.outputs.append(eph.to_netcdf(target))
@@ -919,6 +927,8 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
             parsed.extend(_parse_nutation_range(r, spec, where))
         elif key == "variables":
             parsed.extend(_parse_variables(r, spec, where))
+        elif key in spinorbit_section.EXPECT_KEYS:          # spin-orbit wing (issue 19)
+            parsed.append(spinorbit_section.parse_expect(key, spec, r.fail))
         elif key == "regime_fractions":
             if not isinstance(spec, dict) or not spec:
                 raise r.fail(where, "expected a table such as { SAM = { value = 0.95, "
@@ -944,7 +954,7 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
 
 #: Keys of the ``[expect]`` table.
 EXPECT_KEYS = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS + (
-    "nutation_range", "variables", "regime_fractions")
+    "nutation_range", "variables", "regime_fractions") + spinorbit_section.EXPECT_KEYS
 
 
 def needs_dataset(scenario: Scenario) -> str | None:
@@ -993,7 +1003,8 @@ def _variable_value(dataset, spec: dict) -> float | None:
 
 def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
                        conservation: dict, *, diagnosis=None, dataset=None,
-                       fractions: dict | None = None) -> list[dict]:
+                       fractions: dict | None = None,
+                       spinorbit: dict | None = None) -> list[dict]:
     """Compare the parsed ``[expect]`` entries with what the run gave.
 
     ``diagnosis`` (:func:`attitude.diagnose` of the initial state) gives the nutation range
@@ -1007,6 +1018,11 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
     for spec in scenario.expect:
         key = spec["key"]
         out = {k: v for k, v in spec.items() if k not in ("variable", "at", "component")}
+        if key == "resonance":                        # spin-orbit wing: a "p:q" string
+            out["got"] = (spinorbit or {}).get(key)
+            out["ok"] = out["got"] == spec["expected"]
+            results.append(out)
+            continue
         if key == "regime":
             out["got"] = regime
             out["ok"] = regime == spec["expected"]
@@ -1022,6 +1038,8 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
             got = _variable_value(dataset, spec)
         elif key.startswith("regime_fractions."):
             got = None if fractions is None else fractions.get(key.split(".", 1)[1], 0.0)
+        elif key == "libration_amplitude":            # spin-orbit wing
+            got = (spinorbit or {}).get(key)
         else:
             out["got"] = conservation[key]
             out["ok"] = bool(out["got"] <= spec["expected"])

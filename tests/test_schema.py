@@ -28,7 +28,8 @@ def test_schema_keys_match_the_loader():
         assert set(props[table]["properties"]) == set(SCHEMA[table]), table
     expect = props["expect"]["properties"]
     assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS, "nutation_range",
-                           "variables", "regime_fractions"} == set(EXPECT_KEYS)
+                           "variables", "regime_fractions",
+                           "libration_amplitude", "resonance"} == set(EXPECT_KEYS)
     assert expect["regime"]["enum"] == list(REGIMES)
 
 
