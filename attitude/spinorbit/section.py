@@ -416,11 +416,11 @@ def section_figure(section: xr.Dataset, *, title: str | None = None, centres=())
         Without matplotlib.
     """
     try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional ('attitude[plot]')
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional ('attitude-dynamics[plot]')
         from matplotlib.figure import Figure
     except ImportError:
         raise PlotUnavailableError("the section figure needs matplotlib: pip install "
-                                   "'attitude[plot]'") from None
+                                   "'attitude-dynamics[plot]'") from None
     fig = Figure(figsize=(7.0, 6.0), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
