@@ -33,10 +33,12 @@ from .deprecation import MOVED_MODULES, install
 from .ephemeris import Ephemeris
 from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
 from .orbit import KeplerOrbit
+from .photometry import Geometry, Lightcurve, lightcurve
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
 from .propagation.torquefree import diagnose
+from .shape import Polyhedron
 from .state import INERTIAL_FRAMES, AttitudeState
 from .version import __version__
 
@@ -62,6 +64,11 @@ __all__ = [
     "INERTIAL_FRAMES",
     "SYMMETRY_RTOL",
     "TRIANGLE_RTOL",
+    # photometry (issue 15)
+    "Polyhedron",
+    "Geometry",
+    "Lightcurve",
+    "lightcurve",
     *errors.__all__,          # every exception and warning
 ]
 

@@ -32,6 +32,8 @@ __all__ = [
     "InsufficientDataError",
     "ClassificationError",
     "MissingDependencyError",
+    "PhotometryError",
+    "LightcurveFormatError",
     "PlotUnavailableError",
     "AttitudeWarning",
     "NearSeparatrixWarning",
@@ -127,6 +129,17 @@ class MissingDependencyError(AttitudeError, ImportError):
 
 class PlotUnavailableError(MissingDependencyError):
     """matplotlib is not installed (``pip install 'attitude[plot]'``)."""
+
+
+class PhotometryError(AttitudeError, ValueError):
+    """Photometric input that cannot give a lightcurve or a period (a zero or
+    antiparallel Sun vector, an unknown scattering law, a negative albedo, a
+    lightcurve too short for the requested periods, ...)."""
+
+
+class LightcurveFormatError(AttitudeError, ValueError):
+    """An observed lightcurve file (ALCDEF, CSV, netCDF) that does not follow its
+    format; the message names the line."""
 
 
 class AttitudeWarning(UserWarning):
