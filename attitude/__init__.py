@@ -33,7 +33,7 @@ from .deprecation import MOVED_MODULES, install
 from .ephemeris import Ephemeris
 from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
 from .orbit import KeplerOrbit
-from .photometry import Geometry, Lightcurve, lightcurve
+from .photometry import Geometry, Lightcurve, PeriodFit, fit_periods, lightcurve
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
@@ -69,6 +69,8 @@ __all__ = [
     "Geometry",
     "Lightcurve",
     "lightcurve",
+    "fit_periods",
+    "PeriodFit",
     *errors.__all__,          # every exception and warning
 ]
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 from attitude.photometry.brightness import facet_brightness, lightcurve
 from attitude.photometry.geometry import Geometry, phase_angle, reduced_magnitude
 from attitude.photometry.lightcurve import Lightcurve
+from attitude.photometry.periods import PeriodFit, fit_periods, lattice_combination
 from attitude.photometry.scattering import (
     LAWS,
     AshikhminShirley,
@@ -32,4 +33,4 @@ from attitude.photometry.scattering import (
 __all__ = ["Geometry", "phase_angle", "reduced_magnitude", "Lightcurve", "lightcurve",
            "facet_brightness", "LAWS", "ScatteringLaw", "Lambert", "LommelSeeliger",
            "LommelSeeligerLambert", "Hapke", "Phong", "AshikhminShirley", "FacetMaterials",
-           "scattering_law"]
+           "scattering_law", "PeriodFit", "fit_periods", "lattice_combination"]
