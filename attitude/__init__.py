@@ -33,7 +33,7 @@ from .deprecation import MOVED_MODULES, install
 from .ephemeris import Ephemeris
 from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
 from .orbit import KeplerOrbit
-from .photometry import Geometry, Lightcurve, PeriodFit, fit_periods, lightcurve
+from .photometry import Geometry, Lightcurve, PeriodFit, fit_periods, lightcurve, read_lightcurve
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
@@ -71,6 +71,7 @@ __all__ = [
     "lightcurve",
     "fit_periods",
     "PeriodFit",
+    "read_lightcurve",
     *errors.__all__,          # every exception and warning
 ]
 

@@ -17,6 +17,7 @@ from attitude.photometry.brightness import facet_brightness, lightcurve
 from attitude.photometry.geometry import Geometry, phase_angle, reduced_magnitude
 from attitude.photometry.lightcurve import Lightcurve
 from attitude.photometry.periods import PeriodFit, fit_periods, lattice_combination
+from attitude.photometry.readers import read_alcdef, read_csv, read_lightcurve
 from attitude.photometry.scattering import (
     LAWS,
     AshikhminShirley,
@@ -33,4 +34,5 @@ from attitude.photometry.scattering import (
 __all__ = ["Geometry", "phase_angle", "reduced_magnitude", "Lightcurve", "lightcurve",
            "facet_brightness", "LAWS", "ScatteringLaw", "Lambert", "LommelSeeliger",
            "LommelSeeligerLambert", "Hapke", "Phong", "AshikhminShirley", "FacetMaterials",
-           "scattering_law", "PeriodFit", "fit_periods", "lattice_combination"]
+           "scattering_law", "PeriodFit", "fit_periods", "lattice_combination",
+           "read_lightcurve", "read_alcdef", "read_csv"]
