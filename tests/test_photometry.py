@@ -218,3 +218,38 @@ def test_bad_laws_and_shapes():
             [0, 1, 1]]
     with pytest.raises(ShapeModelError, match="not closed"):
         att.Polyhedron(cube, open_box)
+
+
+def _two_spheres(subdivisions=3, gap=3.0):
+    one = att.Polyhedron.ellipsoid(1.0, 1.0, 1.0, subdivisions=subdivisions)
+    n = len(one.vertices)
+    vertices = np.vstack([one.vertices, one.vertices + [gap, 0.0, 0.0]])
+    return att.Polyhedron(vertices, np.vstack([one.faces, one.faces + n])), one
+
+
+def test_shadows_two_spheres_in_line():
+    """Two equal spheres on the x axis, Sun and observer along +x: the rear sphere is in
+    the front one's shadow, so the shadowed flux is one sphere's (and twice that
+    without shadows).  Off the axis, neither is hidden."""
+    pytest.importorskip("embreex")
+    pair, one = _two_spheres()
+    along = np.array([[1.0, 0.0, 0.0]])
+    single, _ = facet_brightness(one, along, along, "lommel-seeliger")
+    unshadowed, _ = facet_brightness(pair, along, along, "lommel-seeliger")
+    shadowed, _ = facet_brightness(pair, along, along, "lommel-seeliger", shadows=True)
+    # fluxes are relative to the volume-equivalent sphere: two spheres -> 2**(2/3)
+    scale = 2 ** (2 / 3)
+    assert unshadowed[0] * scale == pytest.approx(2 * single[0], rel=1e-12)
+    assert shadowed[0] * scale == pytest.approx(single[0], rel=2e-3)
+    side = np.array([[0.0, 0.0, 1.0]])
+    free, _ = facet_brightness(pair, side, side, "lommel-seeliger", shadows=True)
+    assert free[0] * scale == pytest.approx(2 * single[0], rel=1e-12)
+
+
+def test_shadows_without_embree_name_the_extra(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "embreex", None)
+    shape = att.Polyhedron.ellipsoid(1.0, 1.0, 1.0, subdivisions=1)
+    with pytest.raises(att.MissingDependencyError, match=r"attitude\[shadows\]"):
+        facet_brightness(shape, [[1.0, 0, 0]], [[1.0, 0, 0]], shadows=True)

@@ -22,6 +22,7 @@ from scipy.spatial.transform import Rotation
 from attitude.errors import PhotometryError
 from attitude.photometry.geometry import Geometry
 from attitude.photometry.lightcurve import Lightcurve
+from attitude.photometry.periods import blas_single_thread
 from attitude.photometry.scattering import FacetMaterials, scattering_law
 from attitude.photometry.shadows import ShadowCaster
 from attitude.shape import Polyhedron
@@ -154,6 +155,13 @@ def facet_brightness(shape: Polyhedron, sun_body, observer_body, law="lommel-see
     else:
         groups = [(scattering_law(law), None)]
     caster = ShadowCaster(shape) if shadows else None
+    with blas_single_thread():
+        return _facet_loop(s, o, cos_alpha, normals, areas, groups, caster,
+                           facet_contributions, chunk_elements)
+
+
+def _facet_loop(s, o, cos_alpha, normals, areas, groups, caster, facet_contributions,
+                chunk_elements):
     n, n_faces = len(s), len(normals)
     flux = np.zeros(n)
     facet = np.zeros((n, n_faces)) if facet_contributions else None
@@ -170,11 +178,11 @@ def facet_brightness(shape: Polyhedron, sun_body, observer_body, law="lommel-see
             np.maximum(mu, 0.0, out=mu)
             if mask is not None:
                 mu0 *= mask if idx is None else mask[:, idx]
-            f = law_k(mu0, mu, cos_alpha[lo:hi])
-            flux[lo:hi] += f @ ak
+            f = law_k.kernel(mu0, mu, cos_alpha[lo:hi])
+            flux[lo:hi] += law_k.scale * (f @ ak)
             if facet is not None:
                 cols = slice(None) if idx is None else idx
-                facet[lo:hi, cols] = f * ak
+                facet[lo:hi, cols] = f * (law_k.scale * ak)
     return flux, facet
 
 

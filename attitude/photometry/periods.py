@@ -178,7 +178,7 @@ def _chi2_fit(t, y, w, freqs, terms, offsets):
     return float(resid @ resid), coef, resid
 
 
-def _blas_single_thread():
+def blas_single_thread():
     """Small matrix products run faster on one BLAS thread (much faster on a loaded
     machine, where OpenBLAS threads spin); threadpoolctl is optional."""
     try:
@@ -264,7 +264,7 @@ def fit_periods(times, magnitudes, sigma=None, n_periods: int = 2, order: int = 
     >>> round(float(fit.periods[0]) / 3600, 4), round(fit.lightcurve_period / 3600, 4)
     (6.0, 6.0)
     """
-    with _blas_single_thread():
+    with blas_single_thread():
         return _fit_periods(times, magnitudes, sigma, n_periods, order, sessions,
                             min_period, max_period, n_peaks, oversample, significance)
 
