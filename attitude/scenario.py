@@ -33,6 +33,8 @@ from .errors import (
     ScenarioError,
     TorqueConfigError,
 )
+from .photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
+from .photometry.config import parse_photometry
 from .population import Ensemble
 from .propagation.batch import STATUS_FAILED, STATUS_OK
 from .propagation.propagator import METHODS, propagate
@@ -63,6 +65,8 @@ SCHEMA: dict[str, dict[str, Any]] = {
     "expect": dict,
     "ensemble": {"size": int, "seed": int, "model": str, "mean": dict, "sigma": dict,
                  "table": str, "chunk": int, "include_nominal": bool},
+    # --- photometry (issue 15): parsed by attitude.photometry.config ---
+    "photometry": dict,
 }
 _BODY_KINDS = ("principal_moments", "inertia", "shape", "parts")
 _PART_PLACEMENT = ("primitive", "offset", "orientation")
@@ -90,6 +94,9 @@ class Scenario:
     """An :class:`attitude.Ensemble` when the file has an ``[ensemble]`` table (``body``
     and ``state`` are then its nominal member: body 0, or the first valid one)."""
     chunk: int | None = None
+    photometry: Any = None
+    """The parsed ``[photometry]`` table (:class:`attitude.photometry.config.PhotometryConfig`),
+    used by ``attitude lightcurve``."""
 
     @property
     def times(self) -> np.ndarray:
@@ -259,11 +266,18 @@ def load_scenario(path: str | Path) -> Scenario:
     expect = _parse_expect(r, r.table(doc, "expect", required=False))
     if ensemble is None and any(e["key"].startswith("regime_fractions") for e in expect):
         raise r.fail("expect.regime_fractions", "only for scenarios with an [ensemble] table")
+    # --- photometry (issue 15): the [photometry] table and the lightcurve [expect] keys ---
+    photometry = None
+    if "photometry" in doc:
+        photometry = parse_photometry(doc["photometry"], doc.get("expect"), path, body)
+    elif any(k in LIGHTCURVE_EXPECT_KEYS for k in doc.get("expect", {})):
+        raise r.fail("expect", "lightcurve expectations need a [photometry] table")
+    # --- end photometry ---
     return Scenario(path=path, name=name, description=description, body=body, state=state,
                     duration=duration, step=step, method=method, rtol=rtol,
                     integrator_step=integrator_step, order=order, torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect,
-                    ensemble=ensemble, chunk=chunk)
+                    ensemble=ensemble, chunk=chunk, photometry=photometry)
 
 
 def _ensemble(r: _Reader, doc: dict, folder: Path):
@@ -915,6 +929,8 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
                 raise r.fail(where, "expected { max = ... }")
             parsed.append({"key": key, "expected": r.quantity(spec["max"], "",
                                                               f"{where}.max")})
+        elif key in LIGHTCURVE_EXPECT_KEYS:
+            continue           # photometry (issue 15): parsed by attitude.photometry.config
         elif key == "nutation_range":
             parsed.extend(_parse_nutation_range(r, spec, where))
         elif key == "variables":
@@ -944,7 +960,7 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
 
 #: Keys of the ``[expect]`` table.
 EXPECT_KEYS = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS + (
-    "nutation_range", "variables", "regime_fractions")
+    "nutation_range", "variables", "regime_fractions") + LIGHTCURVE_EXPECT_KEYS
 
 
 def needs_dataset(scenario: Scenario) -> str | None:
