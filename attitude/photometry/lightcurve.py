@@ -84,9 +84,10 @@ class Lightcurve:
         ----------
         time : array_like, shape (n,)
             Seconds since `epoch`.
-        flux, magnitude, magnitude_error, phase_angle, sun_distance, observer_distance,
-        light_time : array_like, optional
+        flux, magnitude, magnitude_error, phase_angle : array_like, optional
             Per epoch (scalars broadcast).  ``magnitude`` defaults to ``-2.5 log10 flux``.
+        sun_distance, observer_distance, light_time : array_like, optional
+            m, m, s; per epoch or scalars.
         session : array_like of int, optional
         facet_flux : array_like, shape (n, n_faces), optional
         epoch : astropy Time
