@@ -339,6 +339,15 @@ def _check_one(path: str) -> dict:
     else:
         out["name"] = result.scenario.name
         out["expect"] = [{k: v for k, v in e.items()} for e in result.expectations]
+        # --- photometry (issue 15): the lightcurve expectations ---
+        if result.scenario.photometry is not None and result.scenario.photometry.expect:
+            try:
+                lc_run = run_lightcurve(result.scenario, result.scenario.photometry,
+                                        write=False)
+                out["expect"].extend(lc_run.expect)
+            except AttitudeError as exc:
+                out.update(status="input", message=str(exc))
+        # --- end photometry ---
     if out["message"] and path not in out["message"]:
         out["message"] = f"{path}: {out['message']}"
     out["seconds"] = time.perf_counter() - start

@@ -104,3 +104,11 @@ def test_no_photometry_table_exits_2(tmp_path, capsys):
     path.write_text(text[:text.index("[photometry]")])
     assert main(["lightcurve", str(path)]) == 2
     assert "no [photometry] table" in capsys.readouterr().err
+
+
+def test_check_includes_the_lightcurve_expectations(tmp_path, capsys):
+    path = _write(tmp_path, expect=EXPECT + 'regime = "PA-short"\n')
+    assert main(["check", str(path), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "lightcurve_period" in out and "lightcurve_amplitude" in out and "3 passed" in out
+    assert not (tmp_path / "lc.nc").exists()          # check writes nothing
