@@ -112,3 +112,21 @@ def test_check_includes_the_lightcurve_expectations(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "lightcurve_period" in out and "lightcurve_amplitude" in out and "3 passed" in out
     assert not (tmp_path / "lc.nc").exists()          # check writes nothing
+
+
+def test_orbit_geometry_from_the_scenario(tmp_path):
+    """[photometry] orbit + observer = "earth": per-epoch geometry with distances and
+    light time stored in the lightcurve file."""
+    from attitude.photometry import read_lightcurve
+
+    orbit = ('orbit = { mu = "1.32712440018e20 m3/s2", a = "1.2 AU", e = 0.1, '
+             'i = "5 deg", mean_anomaly = "30 deg" }\nobserver = "earth"\n')
+    photometry = GOOD.replace("sun = [1.0, 0.0, 0.0]\nobserver = [1.0, 0.0, 0.0]\n", orbit)
+    path = _write(tmp_path, photometry, expect="")
+    assert main(["lightcurve", str(path), "--quiet"]) == 0
+    ds = read_lightcurve(tmp_path / "lc.nc").dataset
+    au = 149_597_870_700.0
+    assert np.all((ds.sun_distance.values > 1.07 * au) & (ds.sun_distance.values < 1.33 * au))
+    np.testing.assert_allclose(ds.light_time.values, ds.observer_distance.values
+                               / 299_792_458.0, rtol=1e-4)
+    assert np.all(ds.phase_angle.values > 0)
