@@ -182,6 +182,12 @@ def test_geometry_from_earth_ephemeris():
     assert np.all((r_earth > 0.98) & (r_earth < 1.02))
     np.testing.assert_allclose(geom.light_time, geom.observer_distance / 299_792_458.0,
                                rtol=1e-4)
+    # the same epochs as an astropy Time array
+    from astropy.time import TimeDelta
+
+    when = Time("2029-03-01", scale="tdb") + TimeDelta(t, format="sec")
+    again = Geometry.from_orbit(orbit, when, "earth")
+    np.testing.assert_allclose(again.observer, geom.observer, rtol=0, atol=1e-12)
 
 
 def test_netcdf_round_trip(tmp_path):

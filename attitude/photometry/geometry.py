@@ -211,8 +211,9 @@ class Geometry:
         orbit : KeplerOrbit or path
             The target's heliocentric orbit (``mu`` of the Sun), or any object with
             ``position(t)`` (m, heliocentric, inertial ``frame``).
-        times : array_like
-            Seconds since `epoch` at the body (emission times).
+        times : array_like or astropy Time
+            Seconds since `epoch` at the body (emission times), or an astropy Time
+            array (then `epoch` defaults to its first element).
         observer : "earth", "sun" or path, optional
             The observer: ``"earth"`` (geocentre, astropy's built-in ephemeris), or an
             object with ``position(t)`` giving the observer's heliocentric position (m).
@@ -250,6 +251,9 @@ class Geometry:
         >>> geom.sun.shape, bool((geom.light_time > 0).all())
         ((2, 3), True)
         """
+        if isinstance(times, Time):
+            epoch = times[0] if epoch is None and times.ndim else (epoch or times)
+            times = np.atleast_1d((times - epoch).sec)
         t = np.atleast_1d(np.asarray(times, dtype=float))
         target = as_path(orbit)
         r_target = np.asarray(target.position(t), dtype=float).reshape(len(t), 3)
