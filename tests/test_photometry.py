@@ -259,3 +259,23 @@ def test_shadows_without_embree_name_the_extra(monkeypatch):
     shape = att.Polyhedron.ellipsoid(1.0, 1.0, 1.0, subdivisions=1)
     with pytest.raises(att.MissingDependencyError, match=r"attitude\[shadows\]"):
         facet_brightness(shape, [[1.0, 0, 0]], [[1.0, 0, 0]], shadows=True)
+
+
+def test_surface_properties_drive_the_brdf():
+    """A surface of rho_s = 0 and rho_d = A under Phong is a Lambert surface of albedo A;
+    bad fractions are refused."""
+    from attitude.surface import OpticalProperties, Surface
+
+    shape = att.Polyhedron.ellipsoid(2.0, 1.0, 1.0, subdivisions=2)
+    surf = Surface(shape, (OpticalProperties(0.0, 0.3), OpticalProperties(0.0, 0.5)),
+                   np.arange(len(shape.faces)) % 2)
+    mats = FacetMaterials.from_surface(surf, "phong")
+    sun = Rotation.random(4, random_state=8).apply([1.0, 0, 0])
+    obs = Rotation.random(4, random_state=9).apply([1.0, 0, 0])
+    got, facets = facet_brightness(shape, sun, obs, mats, facet_contributions=True)
+    lam, lam_f = facet_brightness(shape, sun, obs, "lambert", facet_contributions=True)
+    np.testing.assert_allclose(facets, lam_f * surf.diffuse, rtol=1e-13, atol=1e-16)
+    np.testing.assert_allclose(got, facets.sum(axis=1), rtol=1e-13)
+    assert np.all(got < lam)
+    with pytest.raises(ShapeModelError, match="exceeds 1"):
+        OpticalProperties(0.7, 0.4)

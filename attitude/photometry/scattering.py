@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from attitude.errors import PhotometryError
+from attitude.surface import Surface
 
 __all__ = ["ScatteringLaw", "Lambert", "LommelSeeliger", "LommelSeeligerLambert", "Hapke",
            "Phong", "AshikhminShirley", "FacetMaterials", "LAWS", "scattering_law",
@@ -416,6 +417,33 @@ class FacetMaterials:
                                   "facet", key="materials")
         object.__setattr__(self, "laws", laws)
         object.__setattr__(self, "index", index)
+
+    @classmethod
+    def from_surface(cls, surface: Surface, law: str = "ashikhmin-shirley",
+                     exponent: float = 100.0) -> FacetMaterials:
+        """Diffuse + specular laws from a surface's optical properties.
+
+        Each :class:`~attitude.surface.OpticalProperties` becomes a ``"phong"`` or
+        ``"ashikhmin-shirley"`` law with ``diffuse = rho_d`` and ``specular = rho_s``
+        (the fractions the solar-radiation-pressure model uses), and the given
+        specular exponent (the glint's sharpness, which the fractions do not fix).
+
+        Examples
+        --------
+        >>> import attitude as att
+        >>> from attitude.surface import OpticalProperties, Surface
+        >>> from attitude.photometry.scattering import FacetMaterials
+        >>> shape = att.Polyhedron.ellipsoid(1, 1, 1, subdivisions=0)
+        >>> surf = Surface.uniform(shape, OpticalProperties(specular=0.6, diffuse=0.2))
+        >>> FacetMaterials.from_surface(surf, "phong", exponent=40).laws
+        (Phong(diffuse=0.2, specular=0.6, exponent=40.0),)
+        """
+        if law not in ("phong", "ashikhmin-shirley"):
+            raise PhotometryError(f"a surface maps to 'phong' or 'ashikhmin-shirley', got "
+                                  f"{law!r}", key="law")
+        laws = [scattering_law(law, diffuse=p.diffuse, specular=p.specular,
+                               exponent=exponent) for p in surface.properties]
+        return cls(laws, np.asarray(surface.index))
 
     def groups(self) -> list[np.ndarray]:
         """Facet indices of each law, in the order of :attr:`laws`."""
