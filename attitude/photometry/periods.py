@@ -10,6 +10,8 @@ need not be ``f_phi`` and ``f_psi`` themselves (any unimodular change of basis s
 same lattice, and a shape symmetric under a half-turn about the rotation axis shows only
 even multiples of ``f_psi``).  Identifying them is left to a model fit.
 
+Method (one period): the Lomb-Scargle periodogram with harmonics gives candidate
+fundamentals; each and its half are scored by the Fourier series of the given order.
 Method (two periods): the Lomb-Scargle periodogram gives the strongest single
 frequencies; pairs of fundamentals built from them (the peaks, their halves and their
 differences) are scored by the least-squares fit of the 2-D Fourier series of the
@@ -188,11 +190,11 @@ def blas_single_thread():
     return threadpool_limits(1, user_api="blas")
 
 
-def _peaks(t, y, w, f_min, f_max, n_peaks, oversample, sessions_given):
+def _peaks(t, y, w, f_min, f_max, n_peaks, oversample, nterms):
     # astropy is a costly import; only the period analysis needs it
     from astropy.timeseries import LombScargle  # costly import: period analysis only
 
-    ls = LombScargle(t, y, dy=1.0 / w, fit_mean=True, center_data=True)
+    ls = LombScargle(t, y, dy=1.0 / w, fit_mean=True, center_data=True, nterms=nterms)
     freq, power = ls.autopower(minimum_frequency=f_min, maximum_frequency=f_max,
                                samples_per_peak=oversample)
     is_peak = np.r_[False, (power[1:-1] > power[:-2]) & (power[1:-1] >= power[2:]), False]
@@ -305,7 +307,14 @@ def _fit_periods(times, magnitudes, sigma, n_periods, order, sessions, min_perio
     dt = np.median(np.diff(t)) if t.size > 1 else span
     f_max = 1.0 / min_period if min_period else 0.5 / max(dt, 1e-300)
     f_min = 1.0 / max_period if max_period else 1.0 / span
-    peaks, _ = _peaks(tc, y, w, f_min, f_max, n_peaks, oversample, offsets is not None)
+    # one period: the periodogram with harmonics (nterms = order) peaks at the
+    # fundamental of a multi-harmonic curve; two periods: single sines, whose peaks are
+    # the strongest lattice frequencies the pairs are built from
+    # (session zero points removed first: the periodogram has no per-session offsets)
+    y_ls = y if offsets is None else y - offsets @ (
+        (offsets * w[:, None] ** 2).T @ y / ((offsets * w[:, None] ** 2).sum(axis=0)))
+    peaks, _ = _peaks(tc, y_ls, w, f_min, f_max, n_peaks, oversample,
+                      min(order, 4) if n_periods == 1 else 1)
     if peaks.size == 0:
         raise PhotometryError("the periodogram has no peak: is the lightcurve constant?",
                               key="magnitudes")
