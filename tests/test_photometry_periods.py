@@ -115,3 +115,13 @@ def test_bad_input(kwargs, match):
         fit_periods(t, np.cos(t / 3000.0), **kwargs)
     with pytest.raises(PhotometryError, match="too few"):
         fit_periods(t[:10], np.cos(t[:10]), n_periods=2, order=4)
+
+
+def test_initial_periods_skip_the_search():
+    """Starting from the model's (P_phi, P_psi/2) the refinement stays on that lattice
+    basis: f_phi = 1/P1 within 1e-4 on the Apophis curve."""
+    t, mag, p_phi, p_psi = _synthetic("apophis", 3600.0)
+    fit = fit_periods(t, mag, n_periods=2, order=4, initial=(p_phi, p_psi / 2))
+    assert fit.periods[0] == pytest.approx(p_phi, rel=1e-4)
+    with pytest.raises(PhotometryError, match="initial"):
+        fit_periods(t, mag, n_periods=2, initial=(p_phi,))

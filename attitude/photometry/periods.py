@@ -212,7 +212,8 @@ def _peaks(t, y, w, f_min, f_max, n_peaks, oversample, nterms):
 
 def fit_periods(times, magnitudes, sigma=None, n_periods: int = 2, order: int = 4, *,
                 sessions=None, min_period=None, max_period=None, n_peaks: int = 6,
-                oversample: int = 10, significance: float = 3.0) -> PeriodFit:
+                oversample: int = 10, significance: float = 3.0,
+                initial=None) -> PeriodFit:
     """Periods of a lightcurve.
 
     Parameters
@@ -241,6 +242,10 @@ def fit_periods(times, magnitudes, sigma=None, n_periods: int = 2, order: int = 
         Periodogram samples per peak width.
     significance : float
         A term is significant when its amplitude exceeds this many standard errors.
+    initial : sequence of float, optional
+        s: starting periods ``(P1[, P2])`` for the refinement instead of the periodogram
+        search (to test a hypothesis, e.g. the precession and rotation periods of a
+        model).
 
     Returns
     -------
@@ -268,11 +273,12 @@ def fit_periods(times, magnitudes, sigma=None, n_periods: int = 2, order: int = 
     """
     with blas_single_thread():
         return _fit_periods(times, magnitudes, sigma, n_periods, order, sessions,
-                            min_period, max_period, n_peaks, oversample, significance)
+                            min_period, max_period, n_peaks, oversample, significance,
+                            initial)
 
 
 def _fit_periods(times, magnitudes, sigma, n_periods, order, sessions, min_period,
-                 max_period, n_peaks, oversample, significance) -> PeriodFit:
+                 max_period, n_peaks, oversample, significance, initial) -> PeriodFit:
     t = np.asarray(times, dtype=float).ravel()
     y = np.asarray(magnitudes, dtype=float).ravel()
     if t.shape != y.shape:
@@ -310,6 +316,13 @@ def _fit_periods(times, magnitudes, sigma, n_periods, order, sessions, min_perio
     # one period: the periodogram with harmonics (nterms = order) peaks at the
     # fundamental of a multi-harmonic curve; two periods: single sines, whose peaks are
     # the strongest lattice frequencies the pairs are built from
+    if initial is not None:
+        guess = np.asarray(initial, dtype=float).ravel()
+        if guess.shape != (n_periods,) or not np.all(np.isfinite(guess) & (guess > 0)):
+            raise PhotometryError(f"expected {n_periods} positive periods (s), got "
+                                  f"{initial!r}", key="initial")
+        return _refined(tc, y, w, 1.0 / guess, terms, offsets, span, t0, sigma, n_periods,
+                        order, significance)
     # (session zero points removed first: the periodogram has no per-session offsets)
     y_ls = y if offsets is None else y - offsets @ (
         (offsets * w[:, None] ** 2).T @ y / ((offsets * w[:, None] ** 2).sum(axis=0)))
@@ -336,6 +349,13 @@ def _fit_periods(times, magnitudes, sigma, n_periods, order, sessions, min_perio
     scores = [_chi2_fit(tc, y, w, c, terms, offsets)[0] for c in candidates]
     # Among equally good candidates prefer the lowest frequencies (the full lattice).
     best = candidates[int(np.argmin(scores))]
+    return _refined(tc, y, w, best, terms, offsets, span, t0, sigma, n_periods, order,
+                    significance)
+
+
+def _refined(tc, y, w, best, terms, offsets, span, t0, sigma, n_periods, order,
+             significance) -> PeriodFit:
+    """Variable-projection refinement from ``best`` (1/s), covariance and the result."""
 
     def residual(freqs):
         return _chi2_fit(tc, y, w, freqs, terms, offsets)[2]
