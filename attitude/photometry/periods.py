@@ -134,9 +134,23 @@ class PeriodFit:
         """The terms whose amplitude exceeds its uncertainty by the significance factor."""
         return [t for t in self.terms if t["significant"]]
 
-    def model(self, times) -> np.ndarray:  # pragma: no cover - thin
-        """The fitted magnitudes at ``times`` (s, the fit's time origin)."""
-        return self._model(np.asarray(times, dtype=float))
+    def model(self, times) -> np.ndarray:
+        """The fitted magnitudes at ``times`` (s, the fit's time origin; with sessions,
+        the zero point of the first session).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from attitude.photometry.periods import fit_periods
+        >>> t = np.linspace(0, 86400.0, 500)
+        >>> m = 0.3 * np.cos(2 * np.pi * t / 7200.0)
+        >>> fit = fit_periods(t, m, n_periods=1, order=2)
+        >>> bool(np.allclose(fit.model(t), m, atol=1e-9))
+        True
+        """
+        t0, freqs, terms, coef, n0 = self._state
+        tt = np.atleast_1d(np.asarray(times, dtype=float)) - t0
+        return _design(tt, freqs, terms, None)[:, 1:] @ coef[n0:] + coef[0]
 
     def summary(self) -> dict:
         """Periods in hours, as the CLI prints them.
@@ -394,8 +408,7 @@ def _refined(tc, y, w, best, terms, offsets, span, t0, sigma, n_periods, order,
                        strongest=tuple(int(x) for x in jk[strongest]), terms=table,
                        rms=float(np.sqrt(np.mean((resid / w) ** 2))), order=int(order),
                        n_periods=n_periods, note=note)
-    object.__setattr__(result, "_model", lambda tt: (
-        _design(np.asarray(tt) - t0, freqs, terms, None)[:, 1:] @ coef[n0:] + coef[0]))
+    object.__setattr__(result, "_state", (t0, freqs, terms, coef, n0))   # for model()
     return result
 
 
