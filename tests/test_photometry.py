@@ -279,3 +279,19 @@ def test_surface_properties_drive_the_brdf():
     assert np.all(got < lam)
     with pytest.raises(ShapeModelError, match="exceeds 1"):
         OpticalProperties(0.7, 0.4)
+
+
+def test_lightcurve_checks_epochs_and_frame():
+    body = att.RigidBody.from_principal_moments([1.0, 2.0, 2.5])
+    state = att.AttitudeState("2030-01-01", Rotation.identity(), [0, 0, 1e-3], frame="ICRF")
+    eph = att.propagate(body, state, [0.0, 10.0, 20.0])
+    shape = att.Polyhedron.ellipsoid(2.0, 1.5, 1.0, subdivisions=1)
+    with pytest.raises(PhotometryError, match="3"):
+        lightcurve(eph, shape, Geometry(sun=[[1.0, 0, 0]] * 2, observer=[1.0, 0, 0]))
+    with pytest.raises(PhotometryError, match="frame"):
+        lightcurve(eph, shape, Geometry(sun=[1.0, 0, 0], observer=[1.0, 0, 0],
+                                        frame="ECLIPJ2000"))
+    per_epoch = Geometry(sun=[[1.0, 0, 0]] * 3, observer=[[0.0, 1.0, 0]] * 3)
+    const = Geometry(sun=[1.0, 0, 0], observer=[0.0, 1.0, 0])
+    np.testing.assert_allclose(lightcurve(eph, shape, per_epoch).dataset.flux,
+                               lightcurve(eph, shape, const).dataset.flux, rtol=1e-14)
