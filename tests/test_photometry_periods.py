@@ -125,3 +125,10 @@ def test_initial_periods_skip_the_search():
     assert fit.periods[0] == pytest.approx(p_phi, rel=1e-4)
     with pytest.raises(PhotometryError, match="initial"):
         fit_periods(t, mag, n_periods=2, initial=(p_phi,))
+
+
+def test_huge_search_is_refused_with_advice():
+    """Ten years sampled every minute would be a 5e7-frequency periodogram."""
+    t = np.concatenate([np.arange(0, 3600.0, 60.0), [10 * 365.25 * 86400.0]])
+    with pytest.raises(PhotometryError, match="min_period and max_period"):
+        fit_periods(t, np.cos(t / 1000.0), n_periods=1, order=2)

@@ -51,6 +51,9 @@ from attitude.errors import PhotometryError
 
 __all__ = ["PeriodFit", "fit_periods", "fourier_terms", "lattice_combination"]
 
+#: Largest periodogram grid (trial frequencies) fit_periods builds on its own.
+_MAX_GRID = 2e6
+
 
 def fourier_terms(order: int, n_periods: int = 2) -> np.ndarray:
     """Integer multipliers ``(j, k)`` of the Fourier terms ``j f1 + k f2``.
@@ -327,6 +330,13 @@ def _fit_periods(times, magnitudes, sigma, n_periods, order, sessions, min_perio
     dt = np.median(np.diff(t)) if t.size > 1 else span
     f_max = 1.0 / min_period if min_period else 0.5 / max(dt, 1e-300)
     f_min = 1.0 / max_period if max_period else 1.0 / span
+    n_grid = (f_max - f_min) * span * oversample
+    if not n_grid < _MAX_GRID:
+        raise PhotometryError(
+            f"the period search would take {n_grid:.3g} trial frequencies (a span of "
+            f"{span / 86400:.4g} d sampled every {dt:.3g} s); give min_period and "
+            "max_period around the expected periods, or fit shorter stretches",
+            key="min_period")
     # one period: the periodogram with harmonics (nterms = order) peaks at the
     # fundamental of a multi-harmonic curve; two periods: single sines, whose peaks are
     # the strongest lattice frequencies the pairs are built from
