@@ -41,10 +41,12 @@ from .fitting import (
     sample_posterior,
 )
 from .orbit import KeplerOrbit
+from .photometry import Geometry, Lightcurve, PeriodFit, fit_periods, lightcurve, read_lightcurve
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
 from .propagation.torquefree import diagnose
+from .shape import Polyhedron
 from .spinorbit import SpinOrbit
 from .state import INERTIAL_FRAMES, AttitudeState
 from .version import __version__
@@ -79,6 +81,14 @@ __all__ = [
     "INERTIAL_FRAMES",
     "SYMMETRY_RTOL",
     "TRIANGLE_RTOL",
+    # photometry (issue 15)
+    "Polyhedron",
+    "Geometry",
+    "Lightcurve",
+    "lightcurve",
+    "fit_periods",
+    "PeriodFit",
+    "read_lightcurve",
     *errors.__all__,          # every exception and warning
 ]
 

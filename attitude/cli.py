@@ -22,6 +22,8 @@ from .ephemeris import Ephemeris, write_atomically
 from .errors import AttitudeError, PropagationError
 from .formats.aem import convert
 from .formats.spice import convert_to_ck
+from .photometry.config import run_lightcurve  # photometry (issue 15)
+from .photometry.plot import save_lightcurve_figures  # photometry (issue 15)
 from .plot import save_figures
 from .propagation.cluster import local_cluster
 from .scenario import load_scenario, run_scenario
@@ -339,6 +341,15 @@ def _check_one(path: str) -> dict:
     else:
         out["name"] = result.scenario.name
         out["expect"] = [{k: v for k, v in e.items()} for e in result.expectations]
+        # --- photometry (issue 15): the lightcurve expectations ---
+        if result.scenario.photometry is not None and result.scenario.photometry.expect:
+            try:
+                lc_run = run_lightcurve(result.scenario, result.scenario.photometry,
+                                        write=False)
+                out["expect"].extend(lc_run.expect)
+            except AttitudeError as exc:
+                out.update(status="input", message=str(exc))
+        # --- end photometry ---
     if out["message"] and path not in out["message"]:
         out["message"] = f"{path}: {out['message']}"
     out["seconds"] = time.perf_counter() - start
@@ -540,6 +551,51 @@ def _cmd_section(args) -> int:
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK
+# --- photometry (issue 15): attitude lightcurve ------------------------------------------
+_LIGHTCURVE_HELP = """\
+Propagate a scenario, render its lightcurve from the [photometry] table (shape, law,
+Sun/observer geometry, cadence, noise), write it as netCDF ([photometry].output or -o),
+fit its periods and print them: the fundamental periods P1, P2 of the Fourier series
+(every lightcurve frequency is n1/P1 + n2/P2) and the double-peaked lightcurve period.
+The lightcurve keys of [expect] (lightcurve_period, lightcurve_amplitude,
+lightcurve_lattice) are checked.
+
+  attitude lightcurve scenarios/apophis_lightcurve.toml --plot
+
+Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 the propagation failed.
+"""
+
+
+def _cmd_lightcurve(args) -> int:
+    scenario = load_scenario(args.scenario)
+    if scenario.photometry is None:
+        print(f"attitude: error: {args.scenario}: photometry: the scenario has no "
+              "[photometry] table", file=sys.stderr)
+        return EXIT_INPUT
+    result = run_lightcurve(scenario, scenario.photometry, output=args.output)
+    if args.plot:
+        stem = Path(result.outputs[0] if result.outputs else scenario.path).with_suffix("")
+        result.outputs.extend(save_lightcurve_figures(result.lightcurve, result.fit, stem))
+    report = result.report()
+    if args.report:
+        text = json.dumps({"scenario": scenario.name, **report}, indent=2, default=float)
+        write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(text + "\n"))
+    if not args.quiet:
+        fit = result.fit
+        periods = ", ".join(f"P{k + 1} = {p / 3600:.6g} +/- {s / 3600:.2g} h" for k, (p, s)
+                            in enumerate(zip(fit.periods, fit.uncertainties)))
+        print(f"{scenario.name}: {len(result.lightcurve)} epochs, amplitude "
+              f"{report['amplitude_mag']:.3f} mag, rms of the fit {fit.rms:.2g} mag")
+        print(f"  periods: {periods}")
+        print(f"  lightcurve period (double-peaked, 2/f of the strongest term "
+              f"{fit.strongest}): {fit.lightcurve_period / 3600:.6g} h")
+        for e in result.expect:
+            print(f"  expect {e['key']}: expected {e['expected']} {e['unit']}, got "
+                  f"{e['got']}: {'pass' if e['ok'] else 'FAIL'}")
+        for path in result.outputs:
+            print(f"  wrote {path}")
+    return EXIT_OK if result.ok else EXIT_EXPECTATION
+# --- end photometry ----------------------------------------------------------------------
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -608,6 +664,18 @@ def build_parser() -> argparse.ArgumentParser:
     sec.add_argument("--plot", action="store_true", help="also write OUT.png (matplotlib)")
     sec.add_argument("--quiet", action="store_true", help="print nothing on success")
     sec.set_defaults(func=_cmd_section)
+    # --- photometry (issue 15) ---
+    lcp = sub.add_parser("lightcurve", help="synthesise a scenario's lightcurve and fit its "
+                         "periods", description=_LIGHTCURVE_HELP,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    lcp.add_argument("scenario", metavar="SCENARIO.toml", help="scenario with [photometry]")
+    lcp.add_argument("-o", "--output", metavar="OUT.nc",
+                     help="netCDF lightcurve path (overrides [photometry].output)")
+    lcp.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
+    lcp.add_argument("--quiet", action="store_true", help="print nothing on success")
+    lcp.add_argument("--plot", action="store_true", help="write the lightcurve, periodogram, "
+                     "folded and frequency-map figures as PNG (needs matplotlib)")
+    lcp.set_defaults(func=_cmd_lightcurve)
     return parser
 
 

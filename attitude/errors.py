@@ -33,6 +33,8 @@ __all__ = [
     "ClassificationError",
     "SpinOrbitError",
     "MissingDependencyError",
+    "PhotometryError",
+    "LightcurveFormatError",
     "PlotUnavailableError",
     "AttitudeWarning",
     "NearSeparatrixWarning",
@@ -134,6 +136,17 @@ class MissingDependencyError(AttitudeError, ImportError):
 
 class PlotUnavailableError(MissingDependencyError):
     """matplotlib is not installed (``pip install 'attitude-dynamics[plot]'``)."""
+
+
+class PhotometryError(AttitudeError, ValueError):
+    """Photometric input that cannot give a lightcurve or a period (a zero or
+    antiparallel Sun vector, an unknown scattering law, a negative albedo, a
+    lightcurve too short for the requested periods, ...)."""
+
+
+class LightcurveFormatError(AttitudeError, ValueError):
+    """An observed lightcurve file (ALCDEF, CSV, netCDF) that does not follow its
+    format; the message names the line."""
 
 
 class AttitudeWarning(UserWarning):

@@ -33,6 +33,8 @@ from .errors import (
     ScenarioError,
     TorqueConfigError,
 )
+from .photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
+from .photometry.config import parse_photometry
 from .population import Ensemble
 from .propagation.batch import STATUS_FAILED, STATUS_OK
 from .propagation.propagator import METHODS, propagate
@@ -65,6 +67,8 @@ SCHEMA: dict[str, dict[str, Any]] = {
     "ensemble": {"size": int, "seed": int, "model": str, "mean": dict, "sigma": dict,
                  "table": str, "chunk": int, "include_nominal": bool},
     "section": dict,            # spin-orbit wing: checked by spinorbit.section.parse_section
+    # --- photometry (issue 15): parsed by attitude.photometry.config ---
+    "photometry": dict,
 }
 _BODY_KINDS = ("principal_moments", "inertia", "shape", "parts")
 _PART_PLACEMENT = ("primitive", "offset", "orientation")
@@ -94,6 +98,9 @@ class Scenario:
     chunk: int | None = None
     section: Any = None
     """The ``[section]`` table (:class:`attitude.spinorbit.section.SectionConfig`)."""
+    photometry: Any = None
+    """The parsed ``[photometry]`` table (:class:`attitude.photometry.config.PhotometryConfig`),
+    used by ``attitude lightcurve``."""
 
     @property
     def times(self) -> np.ndarray:
@@ -266,11 +273,19 @@ def load_scenario(path: str | Path) -> Scenario:
     section = spinorbit_section.load_tables(   # spin-orbit wing: [section], its [expect]
         doc, body=body, torques=torques, expect=expect, ensemble=ensemble,
         folder=path.parent, fail=r.fail)
+    # --- photometry (issue 15): the [photometry] table and the lightcurve [expect] keys ---
+    photometry = None
+    if "photometry" in doc:
+        photometry = parse_photometry(doc["photometry"], doc.get("expect"), path, body)
+    elif any(k in LIGHTCURVE_EXPECT_KEYS for k in doc.get("expect", {})):
+        raise r.fail("expect", "lightcurve expectations need a [photometry] table")
+    # --- end photometry ---
     return Scenario(path=path, name=name, description=description, body=body, state=state,
                     duration=duration, step=step, method=method, rtol=rtol,
                     integrator_step=integrator_step, order=order, torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect,
-                    ensemble=ensemble, chunk=chunk, section=section)
+                    ensemble=ensemble, chunk=chunk, section=section,
+                    photometry=photometry)
 
 
 def _ensemble(r: _Reader, doc: dict, folder: Path):
@@ -923,6 +938,8 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
                 raise r.fail(where, "expected { max = ... }")
             parsed.append({"key": key, "expected": r.quantity(spec["max"], "",
                                                               f"{where}.max")})
+        elif key in LIGHTCURVE_EXPECT_KEYS:
+            continue           # photometry (issue 15): parsed by attitude.photometry.config
         elif key == "nutation_range":
             parsed.extend(_parse_nutation_range(r, spec, where))
         elif key == "variables":
@@ -954,7 +971,8 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
 
 #: Keys of the ``[expect]`` table.
 EXPECT_KEYS = ("regime",) + PERIOD_KEYS + CONSERVATION_KEYS + (
-    "nutation_range", "variables", "regime_fractions") + spinorbit_section.EXPECT_KEYS
+    "nutation_range", "variables", "regime_fractions") + spinorbit_section.EXPECT_KEYS \
+    + LIGHTCURVE_EXPECT_KEYS
 
 
 def needs_dataset(scenario: Scenario) -> str | None:

@@ -307,6 +307,172 @@ class Polyhedron:
                 "is vertex i - 1, and faces are the triangles after fan triangulation]"
             ) from None
 
+    @classmethod
+    def ellipsoid(cls, a, b, c, subdivisions: int = 4) -> Polyhedron:
+        """A triangulated triaxial ellipsoid with semi-axes along x, y, z.
+
+        The mesh is an icosahedron whose faces are split ``subdivisions`` times
+        into four, projected onto the unit sphere and stretched by ``(a, b, c)``:
+        ``20 * 4**subdivisions`` faces, nearly equal in area on the sphere.
+
+        Parameters
+        ----------
+        a, b, c : float, str or Quantity
+            Semi-axes along x, y and z (a float is metres).
+        subdivisions : int, optional
+            Number of 4-way splits of the icosahedron, 0 to 8.  Default 4
+            (5120 faces).
+
+        Returns
+        -------
+        Polyhedron
+
+        Raises
+        ------
+        ShapeModelError
+            If a semi-axis is not a finite positive length, or `subdivisions`
+            is not an integer in 0..8.
+
+        Examples
+        --------
+        >>> from attitude.shape import Polyhedron
+        >>> sphere = Polyhedron.ellipsoid(1.0, 1.0, 1.0, subdivisions=3)
+        >>> len(sphere.faces), round(sphere.volume / (4 / 3 * 3.141592653589793), 3)
+        (1280, 0.991)
+        """
+        axes = []
+        for name, value in zip("abc", (a, b, c)):
+            try:
+                length = float(value) if not isinstance(value, (str, u.Quantity)) \
+                    else u.Quantity(value).to_value(u.m)
+            except (TypeError, ValueError, u.UnitsError) as err:
+                raise ShapeModelError(f"semi-axis {name} must be a length, got {value!r} "
+                                      f"({err})") from None
+            if not (np.isfinite(length) and length > 0):
+                raise ShapeModelError(f"semi-axis {name} must be a finite positive length, "
+                                      f"got {value!r}")
+            axes.append(length)
+        if not (isinstance(subdivisions, (int, np.integer)) and 0 <= subdivisions <= 8):
+            raise ShapeModelError(f"subdivisions must be an integer in 0..8 (20 * 4**n faces), "
+                                  f"got {subdivisions!r}")
+        vertices, faces = _icosphere(int(subdivisions))
+        return cls(vertices * np.asarray(axes), faces)
+
+    @classmethod
+    def ellipsoid_from_moments(cls, principal_moments, volume: float = 1.0,
+                               subdivisions: int = 4) -> Polyhedron:
+        """The homogeneous triaxial ellipsoid with given principal-moment ratios.
+
+        A uniform ellipsoid with semi-axes ``a, b, c`` along x, y, z has
+        ``A = m (b^2 + c^2) / 5`` and cyclic, so
+        ``a^2 : b^2 : c^2 = (B + C - A) : (A + C - B) : (A + B - C)``.
+        The moments are sorted ``A <= B <= C``, so ``a >= b >= c``: x is the long
+        axis (the axis of A), as in the principal frame of a :class:`RigidBody`.
+
+        Parameters
+        ----------
+        principal_moments : array_like, shape (3,)
+            Principal moments in any units and any scale (only ratios matter).
+        volume : float, optional
+            Volume of the exact ellipsoid, m^3 (default 1).
+        subdivisions : int, optional
+            See :meth:`ellipsoid`.
+
+        Raises
+        ------
+        ShapeModelError
+            If the moments are not three positive finite numbers obeying the
+            strict triangle inequality ``A + B > C`` (a flat body has no
+            ellipsoid).
+
+        Examples
+        --------
+        >>> from attitude.shape import Polyhedron
+        >>> shape = Polyhedron.ellipsoid_from_moments([0.61, 0.965, 1.0], subdivisions=1)
+        >>> ax = shape.vertices.max(axis=0)
+        >>> [round(float(x), 3) for x in ax / ax[0]]
+        [1.0, 0.69, 0.651]
+        """
+        try:
+            moments = np.sort(np.asarray(principal_moments, dtype=float).reshape(3))
+        except (TypeError, ValueError):
+            raise ShapeModelError(f"principal_moments must be three numbers, got "
+                                  f"{principal_moments!r}") from None
+        A, B, C = moments
+        squares = np.array([B + C - A, A + C - B, A + B - C])
+        if not (np.isfinite(moments).all() and A > 0 and squares.min() > 0):
+            raise ShapeModelError(f"principal moments {moments.tolist()} are not those of a "
+                                  "solid ellipsoid: they must be positive with A + B > C")
+        axes = np.sqrt(squares)
+        axes *= (volume / (4.0 / 3.0 * np.pi * axes.prod())) ** (1.0 / 3.0)
+        return cls.ellipsoid(*axes, subdivisions=subdivisions)
+
+    # ------------------------------------------------------------------ facets
+    @property
+    def face_areas(self) -> np.ndarray:
+        """Area of each face, m^2, shape (f,).
+
+        Examples
+        --------
+        >>> from attitude.shape import Polyhedron
+        >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        >>> tet.face_areas.round(4)
+        array([0.5  , 0.5  , 0.5  , 0.866])
+        """
+        return 0.5 * np.linalg.norm(self._face_cross(), axis=1)
+
+    @property
+    def face_normals(self) -> np.ndarray:
+        """Outward unit normal of each face, shape (f, 3).
+
+        Examples
+        --------
+        >>> from attitude.shape import Polyhedron
+        >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        >>> tet.face_normals[0]
+        array([ 0.,  0., -1.])
+        """
+        cross = self._face_cross()
+        return cross / np.linalg.norm(cross, axis=1, keepdims=True)
+
+    @property
+    def face_centroids(self) -> np.ndarray:
+        """Centroid of each face, m, shape (f, 3).
+
+        Examples
+        --------
+        >>> from attitude.shape import Polyhedron
+        >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        >>> tet.face_centroids[3].round(4)
+        array([0.3333, 0.3333, 0.3333])
+        """
+        return self.vertices[self.faces].mean(axis=1)
+
+    def is_convex(self, rtol: float = 1e-9) -> bool:
+        """True when every vertex lies on the inner side of every face plane.
+
+        Examples
+        --------
+        >>> from attitude.shape import Polyhedron
+        >>> Polyhedron.ellipsoid(3, 2, 1, subdivisions=2).is_convex()
+        True
+        """
+        normals = self.face_normals
+        offsets = np.einsum("ij,ij->i", normals, self.vertices[self.faces[:, 0]])
+        scale = float(np.ptp(self.vertices, axis=0).max())
+        for start in range(0, len(normals), 2048):      # bounded memory: 2048 x n_vertices
+            heights = self.vertices @ normals[start:start + 2048].T - offsets[start:start + 2048]
+            if heights.max() > rtol * scale:
+                return False
+        return True
+
+    def _face_cross(self) -> np.ndarray:
+        tri = self.vertices[self.faces]
+        return np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+
     # ------------------------------------------------------------------ mass properties
     @property
     def centroid(self) -> np.ndarray:
@@ -400,6 +566,32 @@ def _tetrahedral_moments(tri: np.ndarray) -> tuple[float, np.ndarray, np.ndarray
         + (d[:, None] * s).T @ s
     ) / 120.0
     return float(volume), first, 0.5 * (second + second.T)
+
+
+# ---------------------------------------------------------------------------- meshes
+def _icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unit-sphere vertices and outward faces of a subdivided icosahedron."""
+    t = (1.0 + 5.0**0.5) / 2.0
+    vertices = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0],
+                         [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
+                         [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], dtype=float)
+    faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
+                      [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+                      [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
+                      [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    for _ in range(subdivisions):
+        # midpoints of the unique edges, numbered after the existing vertices
+        edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        key = np.sort(edges, axis=1)
+        unique, inverse = np.unique(key, axis=0, return_inverse=True)
+        mid = len(vertices) + inverse.reshape(-1, 3)        # (f, 3): edges 01, 12, 20
+        vertices = np.vstack([vertices, 0.5 * vertices[unique].sum(axis=1)])
+        a, b, c = faces.T
+        ab, bc, ca = mid.T
+        faces = np.concatenate([np.stack([a, ab, ca], 1), np.stack([b, bc, ab], 1),
+                                np.stack([c, ca, bc], 1), np.stack([ab, bc, ca], 1)])
+    vertices /= np.linalg.norm(vertices, axis=1, keepdims=True)
+    return vertices, faces
 
 
 # ---------------------------------------------------------------------------- validation

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from attitude.photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
 from attitude.regimes import PERIOD_KEYS, REGIMES
 from attitude.scenario import CONSERVATION_KEYS, EXPECT_KEYS, SCHEMA
 from tests.test_scenario import GOOD
@@ -29,7 +30,8 @@ def test_schema_keys_match_the_loader():
     expect = props["expect"]["properties"]
     assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS, "nutation_range",
                            "variables", "regime_fractions",
-                           "libration_amplitude", "resonance"} == set(EXPECT_KEYS)
+                           "libration_amplitude", "resonance",
+                           *LIGHTCURVE_EXPECT_KEYS} == set(EXPECT_KEYS)
     assert expect["regime"]["enum"] == list(REGIMES)
 
 
