@@ -1,5 +1,5 @@
 """Lightcurve figures: the curve, the periodogram, the folded curve and the frequency
-map of the two-period fit.  matplotlib is imported on use (``attitude[plot]``).
+map of the two-period fit.  matplotlib is imported on use (``attitude-dynamics[plot]``).
 
 Examples
 --------
@@ -31,11 +31,13 @@ __all__ = ["lightcurve_figure", "periodogram_figure", "folded_figure",
 
 def _figure(**kw):
     try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional ('attitude[plot]')
-        from matplotlib.figure import Figure  # optional ('attitude[plot]')
+        from matplotlib.backends.backend_agg import (
+            FigureCanvasAgg,  # optional ('attitude-dynamics[plot]')
+        )
+        from matplotlib.figure import Figure  # optional ('attitude-dynamics[plot]')
     except ImportError:
         raise PlotUnavailableError("the figures need matplotlib: pip install "
-                                   "'attitude[plot]'") from None
+                                   "'attitude-dynamics[plot]'") from None
     fig = Figure(**kw)
     FigureCanvasAgg(fig)
     return fig

@@ -8,7 +8,7 @@ The test is per facet (no partial shadows inside a facet): the error shrinks wit
 facet size.
 
 embree is an optional dependency, installed by the ``shadows`` extra
-(``pip install "attitude[shadows]"``, which brings ``embreex``).
+(``pip install "attitude-dynamics[shadows]"``, which brings ``embreex``).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def _embree():
         from embreex.mesh_construction import TriangleMesh  # optional: "shadows" extra
     except ImportError:
         raise MissingDependencyError(
-            "self-shadowing needs embree: pip install \"attitude[shadows]\" (installs "
+            "self-shadowing needs embree: pip install \"attitude-dynamics[shadows]\" (installs "
             "embreex), or set shadows = false", key="shadows") from None
     return rtcore_scene, TriangleMesh
 

@@ -416,8 +416,9 @@ def section_figure(section: xr.Dataset, *, title: str | None = None, centres=())
         Without matplotlib.
     """
     try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional ('attitude-dynamics[plot]')
-        from matplotlib.figure import Figure
+        # matplotlib is optional (the plot extra): imported when a figure is asked for
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: plot extra
+        from matplotlib.figure import Figure  # optional: plot extra
     except ImportError:
         raise PlotUnavailableError("the section figure needs matplotlib: pip install "
                                    "'attitude-dynamics[plot]'") from None
