@@ -257,7 +257,7 @@ def test_shadows_without_embree_name_the_extra(monkeypatch):
 
     monkeypatch.setitem(sys.modules, "embreex", None)
     shape = att.Polyhedron.ellipsoid(1.0, 1.0, 1.0, subdivisions=1)
-    with pytest.raises(att.MissingDependencyError, match=r"attitude\[shadows\]"):
+    with pytest.raises(att.MissingDependencyError, match=r"attitude-dynamics\[shadows\]"):
         facet_brightness(shape, [[1.0, 0, 0]], [[1.0, 0, 0]], shadows=True)
 
 
