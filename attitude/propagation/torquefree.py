@@ -31,9 +31,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special as sp
 
+from .. import freebody as fb
 from .. import quaternion as quat
 from ..body import SYMMETRY_RTOL
 from ..errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
+from ..freebody import (
+    EQUAL_MOMENTS_RTOL,
+    NEAR_SEPARATRIX_WARN,
+    PURE_SPIN_TOL,
+    SEPARATRIX_M1_TOL,
+)
 from ..regimes import PERIOD_KEYS, REGIMES
 from . import elliptic as el
 
@@ -51,52 +58,21 @@ __all__ = [
     "NEAR_SEPARATRIX_WARN",
 ]
 
-_EPS = float(np.finfo(float).eps)
-
-#: Propagation branch tolerance: two moments are *exactly* equal for the solver when
-#: they differ by at most ``RTOL_AXISYMMETRIC * C`` (4 ulp).  Above it the triaxial
-#: formulas are used; they remain exact and continuous down to this limit (tested).
-RTOL_AXISYMMETRIC = 4.0 * _EPS
-#: Principal-axis spin branch: used when the two smaller body components of L are
-#: at most ``PURE_SPIN_TOL * |L|``.  Below ~1e-150 the elliptic solution would square
-#: amplitudes into the subnormal range; the pure spin differs from the exact motion
-#: by O(PURE_SPIN_TOL) relative.
-PURE_SPIN_TOL = 1e-150
-#: Separatrix branch: used when the complementary parameter ``m1 = 1 - k^2`` is at
-#: most this (including ``L^2 = 2EB`` exactly).  Between it and 0 the heteroclinic
-#: closed form equals the elliptic solution to ``O(m1 exp(2 lambda |t|))``, i.e. for
-#: ``lambda |t| < 200``.
-SEPARATRIX_M1_TOL = 1e-200
-#: ``diagnose`` warns (:class:`NearSeparatrixWarning`) when ``0 < |m1| <`` this:
-#: the periods then change by more than 1e-6 relative under a 1-ulp change of input.
-NEAR_SEPARATRIX_WARN = 1e-10
+#: The branch tolerances (:data:`PURE_SPIN_TOL`, :data:`SEPARATRIX_M1_TOL`,
+#: :data:`NEAR_SEPARATRIX_WARN`) live in :mod:`attitude.freebody` with their reasons.
+#: ``RTOL_AXISYMMETRIC`` is this module's earlier name of
+#: :data:`attitude.freebody.EQUAL_MOMENTS_RTOL` (the same value), kept for its users.
+RTOL_AXISYMMETRIC = EQUAL_MOMENTS_RTOL
 
 _BLOCK = 1 << 15  # elements per evaluation block (fits L2 cache)
 _TWO_PI = 2.0 * math.pi
 _FOUR_PI_LD = 4 * el.PI_LD
-_SQRT_HALF = math.sqrt(0.5)
 _LD = el.LD
 
 
 # ===========================================================================
 # small helpers
 # ===========================================================================
-def _qmul(a, b):
-    """Hamilton product of quaternions given as 4-tuples ``(x, y, z, w)``."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    )
-
-
-def _qconj(a):
-    return (-a[0], -a[1], -a[2], a[3])
-
-
 def _lin_turns(tsp, t, c, add=None):
     """``t * c (+ add)`` as an unevaluated sum ``p + e`` (double-double).
 
@@ -138,25 +114,6 @@ def _turn_const(x_ld):
     hi, lo = el.ld_to_dd(x_ld)
     h1, h2 = el.split(hi)
     return (h1, h2, lo, hi)
-
-
-def _l_frame_quat(ct, st, phi, psi):
-    """Quaternion of ``Rz(phi) Rx(theta) Rz(psi)`` from ``cos/sin(theta/2)`` (TF 14)."""
-    hp = 0.5 * (phi + psi)
-    hm = 0.5 * (phi - psi)
-    return (st * np.cos(hm), st * np.sin(hm), ct * np.sin(hp), ct * np.cos(hp))
-
-
-def _half_theta(L1, L2, L3):
-    """``cos(theta/2), sin(theta/2)`` of the angle between body axis 3 and L, from
-    the body components of L without cancellation (TF 13)."""
-    rho = np.hypot(L1, L2)
-    Lt = np.hypot(rho, L3)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        h = np.sqrt((Lt + np.abs(L3)) / (2.0 * Lt))
-        o = rho / (2.0 * Lt * h)
-    pos = L3 >= 0
-    return np.where(pos, h, o), np.where(pos, o, h)
 
 
 def _blocks(nrows, ncols):
@@ -220,12 +177,8 @@ def _invariants_ld(I, w):
     w = w.astype(_LD)
     I1, I2, I3 = I[:, 0], I[:, 1], I[:, 2]
     w1, w2, w3 = w[:, 0], w[:, 1], w[:, 2]
-    d21 = np.abs(I2 - I1)
-    d32 = np.abs(I3 - I2)
-    d31 = np.abs(I3 - I1)
-    Q1 = I1 * d31 * w1 * w1 + I2 * d32 * w2 * w2  # |2E I3 - L^2|        (TF 3)
-    Q3 = I2 * d21 * w2 * w2 + I3 * d31 * w3 * w3  # |L^2 - 2E I1|        (TF 3)
-    L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
+    # magnitudes (the LAM frame's gaps, Q1 and Q3 are negative; negation is exact)
+    d21, d32, d31, Q1, Q3, _, L2 = (np.abs(x) for x in fb.invariants(I1, I2, I3, w1, w2, w3))
     return dict(I1=I1, I2=I2, I3=I3, w1=w1, w2=w2, w3=w3, d21=d21, d32=d32, d31=d31,
                 Q1=Q1, Q3=Q3, L2=L2, L=np.sqrt(L2))
 
@@ -264,18 +217,21 @@ def _branches(I, w):
 
 
 def _kernel_frame(I, w, lam):
-    """Map to the kernel frame: identity for SAM; for LAM the right-handed frame
-    ``(e3, -e2, e1)`` with moments ``(C, B, A)`` (TF 9)."""
-    Ik = np.where(lam[:, None], I[:, ::-1], I)
-    wk = np.where(lam[:, None], np.stack([w[:, 2], -w[:, 1], w[:, 0]], axis=1), w)
+    """(N, 3) moments and rates in the kernel frame (:mod:`attitude.freebody`, TF 9)."""
+    Ik = np.stack(fb.kernel_moments(I[:, 0], I[:, 1], I[:, 2], lam), axis=1)
+    wk = np.stack(fb.kernel_vector(w[:, 0], w[:, 1], w[:, 2], lam), axis=1)
     return Ik, wk
+
+
+_JACOBI_ARGS = ("I1", "I2", "I3", "d21", "d32", "d31", "Q1", "Q3")
 
 
 def _m1_of(I, w, dhi, dlo, lam):
     Ik, wk = _kernel_frame(I, w, lam)
-    inv = _invariants_ld(Ik, wk)
+    v = _invariants_ld(Ik, wk)
     D = np.abs(dhi.astype(_LD) + dlo.astype(_LD))
-    return (inv["d31"] * D / (inv["d32"] * inv["Q3"])).astype(np.float64)
+    return fb.jacobi_parameters(*(v[k] for k in _JACOBI_ARGS), D)[1].astype(
+        np.float64)
 
 
 # ===========================================================================
@@ -292,10 +248,9 @@ def _triaxial_setup(I, w, dhi, dlo, lam):
     I1, I2, I3 = v["I1"], v["I2"], v["I3"]
     d21, d32, d31, Q1, Q3, L = v["d21"], v["d32"], v["d31"], v["Q1"], v["Q3"], v["L"]
     Dl = np.abs(dhi.astype(_LD) + dlo.astype(_LD))  # |L^2 - 2EB|          (TF 5)
-    m = d21 * Q1 / (d32 * Q3)  # k^2                                         (TF 6)
-    m1 = d31 * Dl / (d32 * Q3)  # 1 - k^2, no cancellation                   (TF 6)
-    lamb = np.sqrt(d32 * Q3 / (I1 * I2 * I3))  # lambda                      (TF 4)
-    nu = I3 * d21 / (I1 * d32)  # -n, characteristic of Pi                   (TF 10)
+    m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dl)  # k^2, 1 - k^2 (TF 4, 6)
+    lamb = np.sqrt(lam2)  # lambda                                           (TF 4)
+    nu = fb.characteristic(I1, I2, I3)  # -n, characteristic of Pi           (TF 10)
     onu = 1 + nu
     N = (m + nu) / onu  # shifted characteristic                             (TF 11)
     omN = m1 / onu  # 1 - N
@@ -353,7 +308,7 @@ def _triaxial_setup(I, w, dhi, dlo, lam):
     zero = np.zeros((n, 1))
     phi0, ct0, st0, psi0 = _triaxial_eval(c, zero, angles_only=True)
     c["C0"] = phi0
-    E0 = _l_frame_quat(ct0, st0, 0.0, psi0)
+    E0 = fb.euler313_quaternion(ct0, st0, 0.0, psi0)
     c["E0"] = E0
     extra = dict(m=m, m1=m1, lamb=lamb, K=K, L=L, nu=nu, N=N, w_lin=w_lin, kappa_j=kappa_j,
                  sigma=sigma, Q1=Q1, Q3=Q3, Dl=Dl, I1=I1, I2=I2, I3=I3, d21=d21, d32=d32,
@@ -428,20 +383,17 @@ def _triaxial_eval(c, t, angles_only=False):
     L1 = c["I1"] * w1
     L2 = c["I2"] * w2
     L3 = c["I3"] * w3
-    ct, st = _half_theta(L1, L2, L3)
+    ct, st = fb.half_theta(L1, L2, L3)
     chi = np.arctan2(c["bet"] * snK, c["alp"] * cnK)  # in [0, pi]
     jm4 = j - 4.0 * np.floor(0.25 * j)
     psi = 0.5 * math.pi - c["s"] * (math.pi * jm4 + chi)  # unwrapped mod 4 pi (TF 13)
     if angles_only:
         return phi, ct, st, psi
-    E = _l_frame_quat(ct, st, phi, psi)
-    if c["lam"]:  # E (x) q_M, q_M = (1/sqrt2, 0, 1/sqrt2, 0)                 (TF 9)
-        ex, ey, ez, ew = E
-        E = (_SQRT_HALF * (ew + ey), _SQRT_HALF * (ez - ex), _SQRT_HALF * (ew - ey),
-             -_SQRT_HALF * (ex + ez))
-        w1, w3 = w3, w1
-        w2 = -w2
-    q = _qmul(c["QL"], E)
+    E = fb.euler313_quaternion(ct, st, phi, psi)
+    if c["lam"]:  # E (x) q_M and the rates back in principal axes              (TF 9)
+        E = fb.kernel_attitude(E)
+        w1, w2, w3 = fb.kernel_vector(w1, w2, w3, True)
+    q = quat.multiply_parts(c["QL"], E)
     return q, (w1, w2, w3)
 
 
@@ -464,7 +416,7 @@ def _separatrix_setup(I, w):
     s2 = s1 * s3
     rho0 = np.minimum(np.maximum(np.abs(w1) / a1, np.abs(w3) / a3), 1.0)  # sech(tau0)
     tau0 = np.arcsinh(s2 * w2 / (a2 * rho0))
-    nu = I3 * d21 / (I1 * d32)
+    nu = fb.characteristic(I1, I2, I3)
     sq_nu = np.sqrt(nu)
     c1 = L * d31 / (I1 * I3)
     kappa = (c1 / (lamb * (1 + nu)) * sq_nu).astype(np.float64)
@@ -478,7 +430,7 @@ def _separatrix_setup(I, w):
     zero = np.zeros((n, 1))
     phi0, ct0, st0, psi0 = _separatrix_eval(c, zero, angles_only=True)
     c["C0"] = phi0
-    c["E0"] = _l_frame_quat(ct0, st0, 0.0, psi0)
+    c["E0"] = fb.euler313_quaternion(ct0, st0, 0.0, psi0)
     return c, dict(lamb=lamb, L=L, nu=nu)
 
 
@@ -497,11 +449,11 @@ def _separatrix_eval(c, t, angles_only=False):
     L1 = c["I1"] * w1
     L2 = c["I2"] * w2
     L3 = c["I3"] * w3
-    ct, st = _half_theta(L1, L2, L3)
+    ct, st = fb.half_theta(L1, L2, L3)
     psi = np.arctan2(L1, L2)
     if angles_only:
         return phi, ct, st, psi
-    q = _qmul(c["QL"], _l_frame_quat(ct, st, phi, psi))
+    q = quat.multiply_parts(c["QL"], fb.euler313_quaternion(ct, st, phi, psi))
     return q, (w1, w2, w3)
 
 
@@ -568,7 +520,7 @@ def _precession_eval(c, t):
     sb, cb = np.sin(hb), np.cos(hb)
     qL = (c["Lhat"][0] * sa, c["Lhat"][1] * sa, c["Lhat"][2] * sa, ca)
     qs = (c["es"][0] * sb, c["es"][1] * sb, c["es"][2] * sb, cb)
-    q = _qmul(_qmul(qL, c["q0"]), qs)
+    q = quat.multiply_parts(quat.multiply_parts(qL, c["q0"]), qs)
     cO = 1.0 - 2.0 * sb * sb  # cos(Omega t)
     sO = 2.0 * sb * cb  # sin(Omega t)
     w = tuple(c["wpar"][i] + cO * c["wperp"][i] - sO * c["exw"][i] for i in range(3))
@@ -688,8 +640,8 @@ def free_rotation(moments, omega0, quat0, t):
             qg_t = tuple(_col(qg[:, i]) for i in range(4))
             E0 = c.pop("E0")
             if code == _BR_LAM:
-                qg_t = _qmul(qg_t, _qconj((_SQRT_HALF, 0.0, _SQRT_HALF, 0.0)))
-            c["QL"] = _qmul(qg_t, _qconj(E0))
+                qg_t = quat.multiply_parts(qg_t, quat.conjugate_parts(fb.LAM_FRAME))
+            c["QL"] = quat.multiply_parts(qg_t, quat.conjugate_parts(E0))
         _run_group(ev, c, idx, tt, sw, out_q, out_w)
     return out_q.reshape(batch + (T, 4)), out_w.reshape(batch + (T, 3))
 
