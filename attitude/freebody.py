@@ -48,11 +48,8 @@ import math
 
 import numpy as np
 
-from .body import SYMMETRY_RTOL
-
 __all__ = [
     "EQUAL_MOMENTS_RTOL",
-    "LABEL_EQUAL_MOMENTS_RTOL",
     "PURE_SPIN_TOL",
     "PURE_SPIN_TOL_UNSCALED",
     "SEPARATRIX_M1_TOL",
@@ -62,6 +59,7 @@ __all__ = [
     "kernel_vector",
     "kernel_attitude",
     "invariants",
+    "separatrix_gap",
     "jacobi_parameters",
     "characteristic",
     "half_theta",
@@ -78,12 +76,12 @@ _EPS = float(np.finfo(float).eps)
 #: Above it the triaxial formulas are used; they stay exact and continuous down to it
 #: (tested), so the solver's limit is set by rounding alone.
 EQUAL_MOMENTS_RTOL = 4.0 * _EPS
-#: "Equal moments" for the regime *labels* (``diagnose``, ``RigidBody.symmetry``,
-#: ``attitude.diagnostics``).  A second value is needed: moments given by a user are
-#: rounded data (a tensor diagonalised by ``eigh``, a shape model), and a body whose
-#: moments agree to 1e-12 should be *called* axisymmetric, while the motion is still
-#: computed exactly from the moments as given (with :data:`EQUAL_MOMENTS_RTOL`).
-LABEL_EQUAL_MOMENTS_RTOL = SYMMETRY_RTOL
+# "Equal moments" for the regime *labels* (``diagnose``, ``RigidBody.symmetry``,
+# ``attitude.diagnostics``) is attitude.body.SYMMETRY_RTOL (1e-12).  A second value is
+# needed: moments given by a user are rounded data (a tensor diagonalised by ``eigh``,
+# a shape model), and a body whose moments agree to 1e-12 should be *called*
+# axisymmetric, while its motion is still computed exactly from the moments as given
+# (with EQUAL_MOMENTS_RTOL).
 #: "Pure spin" for the closed form: a principal-axis spin (uniform rotation) when the
 #: two smaller body components of L are at most ``PURE_SPIN_TOL * |L|``.  The closed
 #: form scales moments and rates to O(1) by exact powers of two, so the elliptic
@@ -127,7 +125,7 @@ def kernel_moments(A, B, C, lam):
     >>> kernel_moments(1.0, 2.0, 3.0, True)
     (3.0, 2.0, 1.0)
     """
-    if isinstance(lam, bool):
+    if isinstance(lam, (bool, np.bool_)):
         return (C, B, A) if lam else (A, B, C)
     return np.where(lam, C, A), B, np.where(lam, A, C)
 
@@ -143,7 +141,7 @@ def kernel_vector(x1, x2, x3, lam):
     >>> kernel_vector(*kernel_vector(1.0, 2.0, 3.0, True), True)
     (1.0, 2.0, 3.0)
     """
-    if isinstance(lam, bool):
+    if isinstance(lam, (bool, np.bool_)):
         return (x3, -x2, x1) if lam else (x1, x2, x3)
     return np.where(lam, x3, x1), np.where(lam, -x2, x2), np.where(lam, x1, x3)
 
@@ -195,9 +193,22 @@ def invariants(I1, I2, I3, w1, w2, w3):
     w1s, w2s, w3s = w1 * w1, w2 * w2, w3 * w3
     Q1 = I1 * d31 * w1s + I2 * d32 * w2s                  # 2E I3 - L^2   (TF 3)
     Q3 = I2 * d21 * w2s + I3 * d31 * w3s                  # L^2 - 2E I1   (TF 3)
-    D = I3 * d32 * w3s - I1 * d21 * w1s                   # L^2 - 2E I2   (TF 5)
+    D = separatrix_gap(I1, I2, I3, w1, w3)                # L^2 - 2E I2   (TF 5)
     L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
     return d21, d32, d31, Q1, Q3, D, L2
+
+
+def separatrix_gap(I1, I2, I3, w1, w3):
+    """``D = L^2 - 2E I2 = I3 (I3 - I2) w3^2 - I1 (I2 - I1) w1^2``: its sign tells the side
+    of the separatrix (> 0: about the third axis, SAM in principal axes); the same
+    value in the SAM and the LAM frame (TF 5).
+
+    Examples
+    --------
+    >>> separatrix_gap(1.0, 2.0, 3.0, 1.0, 1.0)      # 3 - 1
+    2.0
+    """
+    return I3 * (I3 - I2) * (w3 * w3) - I1 * (I2 - I1) * (w1 * w1)
 
 
 def jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, D):

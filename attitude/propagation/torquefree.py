@@ -33,7 +33,7 @@ from scipy import special as sp
 
 from .. import freebody as fb
 from .. import quaternion as quat
-from ..body import SYMMETRY_RTOL
+from ..body import SYMMETRY_RTOL, to_body_frame, to_principal_frame
 from ..errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
 from ..freebody import (
     EQUAL_MOMENTS_RTOL,
@@ -248,7 +248,8 @@ def _triaxial_setup(I, w, dhi, dlo, lam):
     I1, I2, I3 = v["I1"], v["I2"], v["I3"]
     d21, d32, d31, Q1, Q3, L = v["d21"], v["d32"], v["d31"], v["Q1"], v["Q3"], v["L"]
     Dl = np.abs(dhi.astype(_LD) + dlo.astype(_LD))  # |L^2 - 2EB|          (TF 5)
-    m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dl)  # k^2, 1 - k^2 (TF 4, 6)
+    # k^2, 1 - k^2 and lambda^2                                             (TF 4, 6)
+    m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dl)
     lamb = np.sqrt(lam2)  # lambda                                           (TF 4)
     nu = fb.characteristic(I1, I2, I3)  # -n, characteristic of Pi           (TF 10)
     onu = 1 + nu
@@ -530,15 +531,15 @@ def _precession_eval(c, t):
 # ===========================================================================
 # public kernel
 # ===========================================================================
-def _validate(moments, omega0, quat0, t):
+def _validate(moments, quat0, omega0, t):
     moments = np.asarray(moments, dtype=np.float64)
     omega0 = np.asarray(omega0, dtype=np.float64)
     quat0 = np.asarray(quat0, dtype=np.float64)
     t = np.atleast_1d(np.asarray(t, dtype=np.float64))
     if moments.shape[-1:] != (3,) or omega0.shape[-1:] != (3,) or quat0.shape[-1:] != (4,):
         raise InvalidStateError(
-            f"free_rotation: expected moments (..., 3), omega0 (..., 3), quat0 (..., 4); got "
-            f"{moments.shape}, {omega0.shape}, {quat0.shape}")
+            f"free_rotation: expected moments (..., 3), quat0 (..., 4), omega0 (..., 3); got "
+            f"{moments.shape}, {quat0.shape}, {omega0.shape}")
     batch = np.broadcast_shapes(moments.shape[:-1], omega0.shape[:-1], quat0.shape[:-1])
     if t.ndim > 1:
         batch = np.broadcast_shapes(batch, t.shape[:-1])
@@ -572,17 +573,32 @@ def _scales(I, w):
     return sI, sw
 
 
-def free_rotation(moments, omega0, quat0, t):
+def _quaternion_then_omega(quat0, omega0, name: str):
+    """Accept the earlier ``(omega, quaternion)`` order of the kernels, with a warning:
+    the last axes (3 and 4) tell the two apart."""
+    if np.shape(quat0)[-1:] == (3,) and np.shape(omega0)[-1:] == (4,):
+        warnings.warn(f"{name}(moments, omega0, quat0, ...) is deprecated: give "
+                      f"{name}(moments, quat0, omega0, ...), the order (moments, quaternion, "
+                      "omega) of every kernel", DeprecationWarning, stacklevel=3)
+        return omega0, quat0
+    return quat0, omega0
+
+
+def free_rotation(moments, quat0, omega0, t):
     """Exact torque-free attitude and body rates of rigid bodies.
+
+    The bodies' frames are their principal frames (``attitude.propagate`` maps any body
+    frame to them and back).
 
     Parameters
     ----------
     moments : array_like, shape (..., 3)
         Principal moments sorted ``A <= B <= C`` (kg m^2; any consistent unit).
+    quat0 : array_like, shape (..., 4)
+        Scalar-last quaternion principal (body) -> inertial at ``t = 0`` (normalised
+        here).
     omega0 : array_like, shape (..., 3)
         Angular velocity at ``t = 0`` in principal-frame components (rad/s).
-    quat0 : array_like, shape (..., 4)
-        Scalar-last quaternion principal -> inertial at ``t = 0`` (normalised here).
     t : array_like, shape (T,) or (..., T)
         Seconds since the initial epoch (any sign, any order), shared by all bodies
         or per body.
@@ -608,12 +624,16 @@ def free_rotation(moments, omega0, quat0, t):
     Examples
     --------
     >>> import numpy as np
-    >>> q, w = free_rotation([0.61, 0.965, 1.0], [0.002, 0.0, 0.05], [0, 0, 0, 1],
+    >>> q, w = free_rotation([0.61, 0.965, 1.0], [0, 0, 0, 1], [0.002, 0.0, 0.05],
     ...                      np.linspace(0.0, 1e5, 5))
     >>> q.shape, w.shape
     ((5, 4), (5, 3))
+
+    The order of earlier releases, ``free_rotation(moments, omega0, quat0, t)``, still
+    works (told apart by the shapes) and warns with a :class:`DeprecationWarning`.
     """
-    batch, I, w, q0, tt = _validate(moments, omega0, quat0, t)
+    quat0, omega0 = _quaternion_then_omega(quat0, omega0, "free_rotation")
+    batch, I, w, q0, tt = _validate(moments, quat0, omega0, t)
     n, T = I.shape[0], tt.shape[-1]
     sI, sw = _scales(I, w)
     Is = I / sI[:, None]  # exact: powers of two
@@ -650,11 +670,9 @@ def exact_arrays(moments, b2p, q0, w0, t):
     """Torque-free closed form of N bodies given principal moments (N, 3), body ->
     principal quaternions (N, 4), attitudes (N, 4) and body rates (N, 3): ``q (N, T, 4),
     w (N, T, 3)`` in the body frames."""
-    q_pb = quat.conjugate(b2p)
-    w0p = quat.rotate(b2p, w0)
-    q0p = quat.multiply(q0, q_pb)                                      # principal -> inertial
-    qp, wp = free_rotation(moments, w0p, q0p, t)                        # (N, T, 4), (N, T, 3)
-    return quat.multiply(qp, b2p[:, None, :]), quat.rotate(q_pb[:, None, :], wp)
+    q0p, w0p = to_principal_frame(q0, w0, b2p)                         # principal -> inertial
+    qp, wp = free_rotation(moments, q0p, w0p, t)                        # (N, T, 4), (N, T, 3)
+    return to_body_frame(qp, wp, b2p[:, None, :])
 
 
 def _run_group(ev, c, idx, tt, sw, out_q, out_w):
@@ -783,7 +801,7 @@ def branch_of(moments, omega0):
     ``"LAM"``) that :func:`free_rotation` uses, for (..., 3) inputs."""
     moments = np.asarray(moments, dtype=float)
     omega0 = np.asarray(omega0, dtype=float)
-    batch, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
+    batch, I, w, _, _ = _validate(moments, [0.0, 0.0, 0.0, 1.0], omega0, [0.0])
     sI, sw = _scales(I, w)
     br, _, _ = _branches(I / sI[:, None], w / sw[:, None])
     names = np.array(["precession", "separatrix", "SAM", "LAM"])
@@ -833,7 +851,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
         rtol_symmetry = SYMMETRY_RTOL
     rtol_symmetry = max(float(rtol_symmetry), RTOL_AXISYMMETRIC)  # never finer than the solver
     rtol_spin = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
-    _, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
+    _, I, w, _, _ = _validate(moments, [0.0, 0.0, 0.0, 1.0], omega0, [0.0])
     if I.shape[0] != 1:
         raise InvalidStateError("diagnose_principal takes one body; use branch_of for batches")
     A, B, C = (float(x) for x in I[0])
@@ -981,9 +999,8 @@ def diagnose(body, state, *, rtol_symmetry=None, rtol_spin=None) -> Diagnosis:
     >>> d.regime, sorted(d.periods)
     ('SAM', ['polhode', 'precession', 'rotation'])
     """
-    b2p = body.body_to_principal
-    w_p = b2p.apply(np.asarray(state.omega_body, dtype=float))
-    q_p2i = (state.attitude * b2p.inv()).as_quat()
+    q_p2i, w_p = to_principal_frame(state.attitude.as_quat(), state.omega_body,
+                                    body.body_to_principal.as_quat())
     return diagnose_principal(body.principal_moments, w_p, rtol_symmetry=rtol_symmetry,
                               rtol_spin=rtol_spin, quat0=q_p2i)
 
@@ -1027,7 +1044,7 @@ def diagnose_many(moments, omega0, *, rtol_symmetry=None, rtol_spin=None) -> dic
     rtol_spin_ = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
     moments = np.atleast_2d(np.asarray(moments, dtype=float))
     omega0 = np.atleast_2d(np.asarray(omega0, dtype=float))
-    _, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
+    _, I, w, _, _ = _validate(moments, [0.0, 0.0, 0.0, 1.0], omega0, [0.0])
     n = I.shape[0]
     keys = ("polhode", "precession", "rotation", "spin", "energy_ratio",
             "separatrix_distance", "nutation_min", "nutation_max")
