@@ -54,8 +54,8 @@ def population(n: int, seed: int = 7):
     epoch = Time("2029-04-13T00:00:00", scale="tdb")
     bodies, states = [], []
     for _ in range(n):
-        a = rng.uniform(0.3, 1.0)
-        b = rng.uniform(a, 1.0)
+        a = rng.uniform(0.5, 1.0)
+        b = rng.uniform(max(a, 1.0 - a), 1.0)          # A <= B <= C = 1, A + B >= C
         R = Rotation.random(random_state=rng).as_matrix()
         bodies.append(att.RigidBody(R @ np.diag([a, b, 1.0]) @ R.T))
         states.append(att.AttitudeState(epoch, Rotation.random(random_state=rng),

@@ -33,7 +33,7 @@ from scipy import special as sp
 
 from .. import freebody as fb
 from .. import quaternion as quat
-from ..body import SYMMETRY_RTOL, to_body_frame, to_principal_frame
+from ..body import SYMMETRY_RTOL, to_principal_frame
 from ..errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
 from ..freebody import (
     EQUAL_MOMENTS_RTOL,
@@ -634,6 +634,15 @@ def free_rotation(moments, quat0, omega0, t):
     """
     quat0, omega0 = _quaternion_then_omega(quat0, omega0, "free_rotation")
     batch, I, w, q0, tt = _validate(moments, quat0, omega0, t)
+    q, w = _evaluate(I, q0, w, tt)
+    T = tt.shape[-1]
+    return q.reshape(batch + (T, 4)), w.reshape(batch + (T, 3))
+
+
+def _evaluate(I, q0, w, tt, b2p=None):
+    """The closed form of (n, 3) bodies at (1|n, T) times, as (n, T, 4) and (n, T, 3)
+    arrays: in the principal frames, or in body frames given the body -> principal
+    quaternions ``b2p`` (n, 4), mapped block by block (:func:`exact_arrays`)."""
     n, T = I.shape[0], tt.shape[-1]
     sI, sw = _scales(I, w)
     Is = I / sI[:, None]  # exact: powers of two
@@ -662,8 +671,10 @@ def free_rotation(moments, quat0, omega0, t):
             if code == _BR_LAM:
                 qg_t = quat.multiply_parts(qg_t, quat.conjugate_parts(fb.LAM_FRAME))
             c["QL"] = quat.multiply_parts(qg_t, quat.conjugate_parts(E0))
+        if b2p is not None:       # to the body frames: q b2p, b2p^-1 w b2p   (body.py)
+            c["b2p"] = tuple(_col(b2p[idx, i]) for i in range(4))
         _run_group(ev, c, idx, tt, sw, out_q, out_w)
-    return out_q.reshape(batch + (T, 4)), out_w.reshape(batch + (T, 3))
+    return out_q, out_w
 
 
 def exact_arrays(moments, b2p, q0, w0, t):
@@ -671,8 +682,9 @@ def exact_arrays(moments, b2p, q0, w0, t):
     principal quaternions (N, 4), attitudes (N, 4) and body rates (N, 3): ``q (N, T, 4),
     w (N, T, 3)`` in the body frames."""
     q0p, w0p = to_principal_frame(q0, w0, b2p)                         # principal -> inertial
-    qp, wp = free_rotation(moments, q0p, w0p, t)                        # (N, T, 4), (N, T, 3)
-    return to_body_frame(qp, wp, b2p[:, None, :])
+    b2p = np.asarray(b2p, dtype=float).reshape(-1, 4)
+    _, I, w, q, tt = _validate(moments, q0p, w0p, t)
+    return _evaluate(I, q, w, tt, b2p / np.linalg.norm(b2p, axis=1, keepdims=True))
 
 
 def _run_group(ev, c, idx, tt, sw, out_q, out_w):
@@ -698,6 +710,9 @@ def _run_group(ev, c, idx, tt, sw, out_q, out_w):
         swr = swg[rows][:, None]
         tb = (tg[:, cols] if shared else tg[rows, cols]) * swr
         q, wv = ev(cb, tb)
+        if "b2p" in cb:           # the frame map of to_body_frame, on the block
+            q = quat.multiply_parts(q, cb["b2p"])
+            wv = quat.rotate_parts(cb["b2p"], wv, inverse=True)
         oq = buf_q[rows, cols]
         ow = buf_w[rows, cols]
         for k in range(4):
