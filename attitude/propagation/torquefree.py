@@ -892,7 +892,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
     br, dhi, dlo = _branches(Is, ws)
     bname = {_BR_PREC: "precession", _BR_SEP: "separatrix"}.get(int(br[0]), "elliptic")
     # excitation (E - E_min)/(E_max - E_min) from 2EC - L^2 = A(C-A)w1^2 + B(C-B)w2^2
-    q1c = A * (C - A) * wv[0] ** 2 + B * (C - B) * wv[1] ** 2
+    q1c = float(fb.invariants(A, B, C, *(float(x) for x in wv))[3])      # 2EC - L^2
     exc = min(1.0, float(A * q1c / (L * L * (C - A)))) if C > A else math.nan
     base.update(dynamic_inertia=D, excitation=exc, energy_ratio=float(1.0 + q1c / (L * L)),
                 branch=bname)
@@ -1101,8 +1101,7 @@ def diagnose_many(moments, omega0, *, rtol_symmetry=None, rtol_spin=None) -> dic
         out["precession"][idx] = (_TWO_PI / np.abs(phidot)).astype(np.float64)
         out["separatrix_distance"][idx] = -m1[far] if lam_side else m1[far]
         out["nutation_min"][idx], out["nutation_max"][idx] = tmin, tmax
-        q1c = A[idx] * (C[idx] - A[idx]) * w[idx, 0] ** 2 + B[idx] * (C[idx] - B[idx]) \
-            * w[idx, 1] ** 2
+        q1c = fb.invariants(A[idx], B[idx], C[idx], *w[idx].T)[3]            # 2EC - L^2
         out["energy_ratio"][idx] = 1.0 + q1c / L[idx] ** 2
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NearSeparatrixWarning)
