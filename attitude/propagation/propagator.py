@@ -206,8 +206,6 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         q, w = integrate_reference_batch(bodies, q0, w0, t, torques=torques, **kwargs)
     if not batch:
         q, w, bodies = q[0], w[0], bodies[0]
-    else:
-        bodies = list(bodies)
     name = bodies.name if isinstance(bodies, RigidBody) else "batch"
     eph = Ephemeris.from_arrays(
         t, q, w, body=bodies, epoch=epoch, frame=frame,
