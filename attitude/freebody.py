@@ -90,7 +90,7 @@ EQUAL_MOMENTS_RTOL = 4.0 * _EPS
 #: O(PURE_SPIN_TOL) relative.
 PURE_SPIN_TOL = 1e-150
 #: "Pure spin" for one step of the splitting free flow, which works on the rates as
-#: given (not scaled): the squares of the transverse rates of a slow spin (|omega| ~
+#: given (not scaled): the squares of the transverse rates of a slow spin (``|omega|`` ~
 #: 1e-8 rad/s) must stay normal numbers, so the margin is 1e-100 rather than
 #: :data:`PURE_SPIN_TOL`.  Both are far below any physical wobble: the uniform rotation
 #: differs from the motion by O(1e-100) relative.
