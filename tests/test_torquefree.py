@@ -509,3 +509,14 @@ def test_input_errors():
         free_rotation([1, 2, 3], [0, 0, 0, 0], [0, 0, 1], [0.0])
     with pytest.raises(InvalidStateError):
         free_rotation([1, 2, 3], Q0, [0, 0, 1], [np.inf])
+
+
+def test_earlier_argument_order_warns_and_agrees():
+    """free_rotation(moments, omega0, quat0, t), the order of earlier releases, still
+    works with a DeprecationWarning and gives the same motion."""
+    t = np.linspace(0.0, 50.0, 6)
+    q, w = free_rotation([1.0, 2.0, 3.0], Q0, [0.3, 0.2, 1.0], t)
+    with pytest.warns(DeprecationWarning, match="moments, quat0, omega0"):
+        q_old, w_old = free_rotation([1.0, 2.0, 3.0], [0.3, 0.2, 1.0], Q0, t)
+    np.testing.assert_array_equal(q_old, q)       # the same call after the swap
+    np.testing.assert_array_equal(w_old, w)
