@@ -32,11 +32,11 @@ from .classify import Classification, classify
 from .deprecation import MOVED_MODULES, install
 from .ephemeris import Ephemeris
 from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
+from .freebody import diagnose
 from .orbit import KeplerOrbit
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
-from .propagation.torquefree import diagnose
 from .state import INERTIAL_FRAMES, AttitudeState
 from .version import __version__
 

@@ -35,6 +35,7 @@ MOVED_MODULES = {
     "attitude.splitting": "attitude.propagation.splitting",
     "attitude.integrate": "attitude.propagation.reference",
     "attitude.events": "attitude.propagation.events",
+    "attitude.propagation.elliptic": "attitude.elliptic",
     "attitude.aem": "attitude.formats.aem",
     "attitude.spice": "attitude.formats.spice",
     "attitude.streaming": "attitude.formats.streaming",
@@ -44,6 +45,9 @@ MOVED_MODULES = {
 #: ``__getattr__`` calls :func:`moved_attribute`.
 MOVED_NAMES = {
     ("attitude.propagation.splitting", "BodyBatch"): "attitude.body",
+    **{("attitude.propagation.torquefree", name): "attitude.freebody"
+       for name in ("Diagnosis", "diagnose", "diagnose_principal", "diagnose_many",
+                    "branch_of")},
 }
 
 

@@ -32,7 +32,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
-from attitude.propagation.torquefree import branch_of, free_rotation  # noqa: E402
+from attitude.freebody import branch_of  # noqa: E402
+from attitude.propagation.torquefree import free_rotation  # noqa: E402
 
 
 def best_of(fn, repeat=3):

@@ -23,11 +23,11 @@ import numpy as np
 import pytest
 
 from attitude.errors import InvalidInertiaError, InvalidStateError
+from attitude.freebody import branch_of
 from attitude.propagation.torquefree import (
     PURE_SPIN_TOL,
     RTOL_AXISYMMETRIC,
     SEPARATRIX_M1_TOL,
-    branch_of,
     free_rotation,
 )
 

@@ -21,7 +21,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from attitude.errors import NearSeparatrixWarning
-from attitude.propagation.torquefree import diagnose, diagnose_principal, free_rotation
+from attitude.freebody import diagnose, diagnose_principal
+from attitude.propagation.torquefree import free_rotation
 from attitude.regimes import PERIOD_KEYS, REGIMES
 
 from . import oracle as O
@@ -268,3 +269,22 @@ def test_diagnose_with_body_and_state():
         assert d.periods[k] == pytest.approx(dp.periods[k], rel=1e-13)
     assert np.allclose(d.angular_momentum_inertial, state.angular_momentum(body), rtol=1e-13)
     assert att.diagnose is diagnose or att.diagnose(body, state).regime == "SAM"
+
+
+def test_diagnosis_moved_to_freebody_old_paths_warn():
+    """The analytic diagnosis lives in attitude.freebody (the elliptic kernels in
+    attitude.elliptic); the earlier paths still work with a DeprecationWarning."""
+    import importlib
+
+    import attitude
+    import attitude.freebody as fb
+    import attitude.propagation.torquefree as tf
+
+    for name in ("diagnose", "diagnose_principal", "diagnose_many", "branch_of",
+                 "Diagnosis"):
+        with pytest.warns(DeprecationWarning, match=f"use attitude.freebody.{name}"):
+            assert getattr(tf, name) is getattr(fb, name)
+    assert attitude.diagnose is fb.diagnose
+    old = importlib.import_module("attitude.propagation.elliptic")
+    with pytest.warns(DeprecationWarning, match="use attitude.elliptic.cel"):
+        assert old.cel is importlib.import_module("attitude.elliptic").cel

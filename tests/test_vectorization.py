@@ -30,9 +30,10 @@ from attitude.body import (
 )
 from attitude.diagnostics import invariants, osculating_polhode_period
 from attitude.errors import InvalidInertiaError, NearSeparatrixWarning
+from attitude.freebody import diagnose_many, diagnose_principal
 from attitude.population import Ensemble
 from attitude.propagation.splitting import free_flow, integrate_splitting
-from attitude.propagation.torquefree import diagnose_many, diagnose_principal, free_rotation
+from attitude.propagation.torquefree import free_rotation
 from attitude.torques import ConstantTorque
 
 EPS = np.finfo(float).eps
