@@ -40,12 +40,12 @@ from .fitting import (
     fit,
     sample_posterior,
 )
+from .freebody import diagnose
 from .orbit import KeplerOrbit
 from .photometry import Geometry, Lightcurve, PeriodFit, fit_periods, lightcurve, read_lightcurve
 from .population import Ensemble
 from .propagation.events import Event, event_table, nutation_crossing
 from .propagation.propagator import propagate
-from .propagation.torquefree import diagnose
 from .shape import Polyhedron
 from .spinorbit import SpinOrbit
 from .state import INERTIAL_FRAMES, AttitudeState

@@ -31,7 +31,8 @@ from os import PathLike
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .errors import InvalidInertiaError
+from . import quaternion as quat
+from .errors import InvalidInertiaError, InvalidStateError
 from .quantities import to_si
 from .shape import Polyhedron
 
@@ -42,6 +43,12 @@ __all__ = [
     "TRIANGLE_RTOL",
     "SYMMETRIC_TENSOR_RTOL",
     "diagonal_inertia",
+    "check_inertia",
+    "principal_quaternions",
+    "to_principal_frame",
+    "to_body_frame",
+    "BodyBatch",
+    "as_bodies",
 ]
 
 #: Two principal moments are treated as equal (axisymmetric body) when they differ by
@@ -53,7 +60,14 @@ SYMMETRY_RTOL = 1e-12
 #: A thin plate sits exactly on the equality, so rounding must not reject it.
 TRIANGLE_RTOL = 1e-10
 
-#: Allowed asymmetry of an input tensor, relative to its largest element.
+#: Allowed asymmetry ``|I_ij - I_ji|`` of an input tensor, relative to its largest
+#: element; the one symmetry tolerance of every inertia check (:func:`check_inertia`:
+#: ``RigidBody``, ``MassProperties``, the rows of an ensemble).  Relative, because
+#: tensors come in any unit and scale (kg m^2 of a cubesat, of an asteroid).  Tensors
+#: that were computed (rotated as ``R I R^T``, summed over parts, integrated over a
+#: shape model) carry a rounding asymmetry of a few ulp per term, far below 1e-10;
+#: a real error (a product of inertia with the wrong sign or a transposed entry) is
+#: O(1) relative, far above it.
 SYMMETRIC_TENSOR_RTOL = 1e-10
 
 
@@ -98,22 +112,108 @@ def _positive(value, unit: str, name: str, *, allow_zero: bool = False) -> float
 
 def _tensor(value, name: str = "inertia") -> np.ndarray:
     """Convert, check shape, finiteness and symmetry; return the symmetrised tensor."""
-    inertia = np.asarray(to_si(value, "kg m2", name=name, error=InvalidInertiaError))
+    inertia = np.asarray(to_si(value, "kg m2", name=name, error=InvalidInertiaError),
+                         dtype=float)
     if inertia.shape != (3, 3):
         raise InvalidInertiaError(f"{name}: expected a 3x3 tensor, got shape {inertia.shape}")
-    if not np.all(np.isfinite(inertia)):
-        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(inertia))[0])
-        raise InvalidInertiaError(
-            f"{name}[{bad[0]}][{bad[1]}] = {float(inertia[bad])}: every element must be finite")
-    scale = np.max(np.abs(inertia))
-    asym = np.abs(inertia - inertia.T)
-    if np.any(asym > SYMMETRIC_TENSOR_RTOL * scale):
-        i, j = (int(k) for k in np.unravel_index(np.argmax(asym), asym.shape))
-        raise InvalidInertiaError(
-            f"{name} is not symmetric: [{i}][{j}] = {float(inertia[i, j])} but [{j}][{i}] = "
-            f"{float(inertia[j, i])}; an inertia tensor equals its transpose (products of "
-            "inertia appear twice with the same sign)")
+    invalid = _tensor_problems(inertia[None], name)
+    if invalid:
+        raise InvalidInertiaError(invalid[0])
     return 0.5 * (inertia + inertia.T)
+
+
+def _tensor_problems(inertia: np.ndarray, name: str = "inertia") -> dict[int, str]:
+    """Rows of an (N, 3, 3) stack that are not finite or not symmetric: ``{i: reason}``."""
+    invalid: dict[int, str] = {}
+    finite = np.all(np.isfinite(inertia), axis=(1, 2))
+    for i in np.flatnonzero(~finite):
+        a, b = (int(k) for k in np.argwhere(~np.isfinite(inertia[i]))[0])
+        invalid[int(i)] = (f"{name}[{a}][{b}] = {float(inertia[i, a, b])}: every element "
+                           "must be finite")
+    safe = np.where(finite[:, None, None], inertia, 0.0)
+    scale = np.abs(safe).max(axis=(1, 2))
+    asym = np.abs(safe - safe.transpose(0, 2, 1))
+    for i in np.flatnonzero(finite & (asym.max(axis=(1, 2)) > SYMMETRIC_TENSOR_RTOL * scale)):
+        a, b = (int(k) for k in np.unravel_index(np.argmax(asym[i]), (3, 3)))
+        invalid[int(i)] = (
+            f"{name} is not symmetric: [{a}][{b}] = {float(inertia[i, a, b])} but [{b}][{a}] = "
+            f"{float(inertia[i, b, a])}; an inertia tensor equals its transpose (products "
+            "of inertia appear twice with the same sign)")
+    return invalid
+
+
+def check_inertia(inertia) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+    """Validate and diagonalise a stack of inertia tensors (vectorised).
+
+    The one inertia validator: :class:`RigidBody` calls it on one tensor and raises on
+    its reason, an ensemble on all rows and records the invalid ones.
+
+    Parameters
+    ----------
+    inertia : (N, 3, 3) array_like
+        Tensors about the centres of mass, kg m^2.
+
+    Returns
+    -------
+    moments : (N, 3) ndarray
+        Principal moments sorted ``A <= B <= C`` (NaN on invalid rows).
+    axes : (N, 3, 3) ndarray
+        Right-handed principal axes as columns (``v_body = axes @ v_principal``);
+        exact permutations for diagonal tensors, the identity on invalid rows.
+    invalid : dict
+        ``{row: reason}`` for tensors that are not finite, not symmetric (beyond
+        :data:`SYMMETRIC_TENSOR_RTOL`), not positive-definite, or that violate the
+        triangle inequality ``A + B >= C`` (beyond :data:`TRIANGLE_RTOL`); the reason
+        names the problem and the fix.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> moments, axes, invalid = check_inertia([np.diag([3.0, 1.0, 2.0]),
+    ...                                         np.diag([1.0, 1.0, 3.0])])
+    >>> moments[0], axes[0] @ [0.0, 0.0, 1.0]        # C = 3 is about body x
+    (array([1., 2., 3.]), array([1., 0., 0.]))
+    >>> invalid[1][:48]
+    'principal moments A = 1, B = 1, C = 3 kg m^2 vio'
+    """
+    inertia = np.array(inertia, dtype=float, ndmin=3)
+    if inertia.shape[1:] != (3, 3):
+        raise InvalidInertiaError(f"inertia: expected (N, 3, 3) tensors, got {inertia.shape}")
+    n = inertia.shape[0]
+    invalid = _tensor_problems(inertia)
+    good = np.ones(n, dtype=bool)
+    good[list(invalid)] = False
+    safe = np.where(good[:, None, None], inertia, np.eye(3))
+    safe = 0.5 * (safe + safe.transpose(0, 2, 1))
+    moments = np.empty((n, 3))
+    axes = np.empty((n, 3, 3))
+    diag = np.einsum("nii->ni", safe)
+    diagonal = np.count_nonzero(safe - diag[:, :, None] * np.eye(3), axis=(1, 2)) == 0
+    if diagonal.any():      # an exact permutation, no eigen-solver rounding
+        order = np.argsort(diag[diagonal], axis=1, kind="stable")
+        moments[diagonal] = np.take_along_axis(diag[diagonal], order, axis=1)
+        axes[diagonal] = np.eye(3)[:, order].transpose(1, 0, 2)
+    if (~diagonal).any():
+        moments[~diagonal], axes[~diagonal] = np.linalg.eigh(safe[~diagonal])
+    axes[:, :, 2] *= np.where(np.linalg.det(axes) < 0, -1.0, 1.0)[:, None]
+    A, B, C = moments[:, 0], moments[:, 1], moments[:, 2]
+    for i in np.flatnonzero(good & ~(A > 0)):
+        invalid[int(i)] = (
+            f"inertia is not positive-definite: smallest principal moment A = {A[i]:.6g} "
+            "kg m^2; every rigid body with extent in three dimensions has A > 0 (a thin rod "
+            "or collinear point masses has A = 0: give it a radius or add the mass it is "
+            "attached to)")
+    for i in np.flatnonzero(good & (A > 0) & (A + B < C * (1 - TRIANGLE_RTOL))):
+        invalid[int(i)] = (
+            f"principal moments A = {A[i]:.6g}, B = {B[i]:.6g}, C = {C[i]:.6g} kg m^2 violate "
+            f"the triangle inequality A + B >= C (A + B = {A[i] + B[i]:.6g}); no mass "
+            "distribution has them: check the units and that the moments are about the "
+            "centre of mass")
+    bad = np.zeros(n, dtype=bool)
+    bad[list(invalid)] = True
+    moments[bad] = np.nan
+    axes[bad] = np.eye(3)
+    return moments, axes, dict(sorted(invalid.items()))
 
 
 def _parallel_axis(mass: float, r: np.ndarray) -> np.ndarray:
@@ -333,20 +433,6 @@ def _single_rotation(rotation) -> Rotation:
     return rotation
 
 
-def _principal_frame(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sorted principal moments and the right-handed matrix whose columns are the
-    principal axes in the body frame (``v_body = V @ v_principal``)."""
-    if np.count_nonzero(inertia - np.diag(np.diag(inertia))) == 0:
-        # Diagonal input: an exact permutation, no eigen-solver rounding.
-        order = np.argsort(np.diag(inertia), kind="stable")
-        moments, axes = np.diag(inertia)[order], np.eye(3)[:, order]
-    else:
-        moments, axes = np.linalg.eigh(inertia)
-    if np.linalg.det(axes) < 0:
-        axes[:, 2] = -axes[:, 2]
-    return moments, axes
-
-
 @dataclass(frozen=True, eq=False)
 class RigidBody:
     """A rigid body's inertia about its centre of mass, validated and diagonalised.
@@ -398,19 +484,10 @@ class RigidBody:
 
     def __post_init__(self):
         inertia = _tensor(self.inertia)
-        moments, axes = _principal_frame(inertia)
-        A, B, C = moments
-        if not A > 0:
-            raise InvalidInertiaError(
-                f"inertia is not positive-definite: smallest principal moment "
-                f"A = {A:.6g} kg m^2; every rigid body with extent in three dimensions has "
-                "A > 0 (a thin rod or collinear point masses has A = 0: give it a radius "
-                "or add the mass it is attached to)")
-        if A + B < C * (1 - TRIANGLE_RTOL):
-            raise InvalidInertiaError(
-                f"principal moments A = {A:.6g}, B = {B:.6g}, C = {C:.6g} kg m^2 violate the "
-                f"triangle inequality A + B >= C (A + B = {A + B:.6g}); no mass distribution "
-                "has them: check the units and that the moments are about the centre of mass")
+        moments, axes, invalid = check_inertia(inertia)
+        if invalid:
+            raise InvalidInertiaError(invalid[0])
+        moments, axes = moments[0], axes[0]
         object.__setattr__(self, "inertia", _copy(inertia))
         object.__setattr__(self, "principal_moments", _copy(moments))
         object.__setattr__(self, "principal_axes", _copy(axes))
@@ -499,3 +576,135 @@ def symmetry_of(moments, rtol: float = SYMMETRY_RTOL) -> str:
     if C - B <= tol:
         return "prolate"
     return "triaxial"
+
+
+# ===========================================================================
+# batches of bodies and the body <-> principal frames
+# ===========================================================================
+def principal_quaternions(axes) -> np.ndarray:
+    """Body -> principal quaternions (N, 4), scalar-last, from principal axes (N, 3, 3)
+    (columns, as :attr:`RigidBody.principal_axes`), with one scipy call for the stack.
+
+    Examples
+    --------
+    >>> body = RigidBody.from_principal_moments([3.0, 1.0, 2.0])
+    >>> q = principal_quaternions([body.principal_axes])
+    >>> bool(np.allclose(q[0], body.body_to_principal.as_quat()))
+    True
+    """
+    axes = np.array(axes, dtype=float, ndmin=3)
+    return Rotation.from_matrix(axes.transpose(0, 2, 1)).as_quat()
+
+
+def to_principal_frame(quaternion, omega, body_to_principal):
+    """Attitudes and rates of bodies -> the same motion seen in their principal frames.
+
+    Parameters
+    ----------
+    quaternion : (..., 4) array_like
+        Body -> inertial, scalar-last.
+    omega : (..., 3) array_like
+        Body-frame angular velocity, rad/s.
+    body_to_principal : (..., 4) array_like
+        Body -> principal quaternions (:func:`principal_quaternions`), broadcasting.
+
+    Returns
+    -------
+    quaternion : (..., 4) ndarray
+        Principal -> inertial.
+    omega : (..., 3) ndarray
+        Principal-frame rates.
+
+    Examples
+    --------
+    >>> body = RigidBody.from_principal_moments([3.0, 1.0, 2.0])
+    >>> q_bp = body.body_to_principal.as_quat()
+    >>> q_p, w_p = to_principal_frame([0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0], q_bp)
+    >>> w_p.round(12) + 0.0                   # body x carries C: the third principal axis
+    array([0., 0., 1.])
+    >>> q_b, w_b = to_body_frame(q_p, w_p, q_bp)
+    >>> w_b.round(12) + 0.0
+    array([1., 0., 0.])
+    """
+    q_bp = np.asarray(body_to_principal, dtype=float)
+    return (quat.multiply(quaternion, quat.conjugate(q_bp)),
+            quat.rotate(q_bp, omega))
+
+
+def to_body_frame(quaternion, omega, body_to_principal):
+    """The inverse of :func:`to_principal_frame`: principal -> inertial quaternions and
+    principal-frame rates back to body -> inertial and body-frame rates.
+
+    Examples
+    --------
+    >>> to_body_frame([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0])[1]
+    array([0., 0., 1.])
+    """
+    return (quat.multiply(quaternion, body_to_principal),
+            quat.rotate(body_to_principal, omega, inverse=True))
+
+
+class BodyBatch(tuple):
+    """The bodies of a batch: a tuple of :class:`RigidBody` (``batch[i]``, ``len``) that
+    also carries their stacked arrays, computed once: ``inertia`` (N, 3, 3),
+    ``principal_moments`` (N, 3), ``body_to_principal`` (N, 4) body -> principal
+    quaternions (one scipy call for the whole stack), ``mass`` (N,) (``None`` if a
+    body has no mass) and ``names``.  Torque models receive it, so vectorised models
+    read the arrays.
+
+    Examples
+    --------
+    >>> batch = BodyBatch([RigidBody.from_principal_moments([1.0, 2.0, 3.0])] * 2)
+    >>> len(batch), batch.principal_moments.shape, batch.body_to_principal.shape
+    (2, (2, 3), (2, 4))
+    """
+
+    def __new__(cls, bodies):
+        self = super().__new__(cls, bodies)
+        self.inertia = np.stack([b.inertia for b in self])
+        self.principal_moments = np.stack([b.principal_moments for b in self])
+        self.body_to_principal = principal_quaternions(
+            np.stack([b.principal_axes for b in self]))
+        masses = [b.mass for b in self]
+        self.mass = None if any(m is None for m in masses) else np.asarray(masses, float)
+        self.names = tuple(b.name for b in self)
+        return self
+
+
+def as_bodies(bodies, *, moments: bool = True, error=InvalidStateError
+              ) -> tuple[BodyBatch, bool]:
+    """The one batch normaliser of bodies: a body, a sequence of bodies or (with
+    ``moments=True``) principal moments (3,) / (N, 3) -> a :class:`BodyBatch` and
+    whether a single body was given.
+
+    Raises ``error`` naming the index of an entry that is not a body.
+
+    Examples
+    --------
+    >>> batch, single = as_bodies([[1.0, 2.0, 3.0], [1.0, 1.5, 2.0]])
+    >>> len(batch), single
+    (2, False)
+    >>> as_bodies(RigidBody.from_principal_moments([1.0, 2.0, 3.0]))[1]
+    True
+    """
+    if isinstance(bodies, RigidBody):
+        return BodyBatch([bodies]), True
+    if moments and (isinstance(bodies, np.ndarray) or (
+            isinstance(bodies, Sequence) and len(bodies) > 0
+            and not isinstance(bodies[0], RigidBody))):
+        m = np.asarray(bodies, dtype=float)
+        if m.shape == (3,):
+            return BodyBatch([RigidBody.from_principal_moments(m)]), True
+        if m.ndim == 2 and m.shape[1] == 3 and m.shape[0] > 0:
+            return BodyBatch([RigidBody.from_principal_moments(row) for row in m]), False
+        raise error(f"bodies: expected a RigidBody, a sequence of them or principal "
+                    f"moments (3,) / (N, 3), got shape {m.shape}")
+    if isinstance(bodies, BodyBatch):
+        return bodies, False
+    bodies = list(bodies)
+    if not bodies:
+        raise error("bodies: empty sequence")
+    for i, b in enumerate(bodies):
+        if not isinstance(b, RigidBody):
+            raise error(f"bodies[{i}]: expected a RigidBody, got {type(b).__name__}")
+    return BodyBatch(bodies), False

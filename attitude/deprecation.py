@@ -26,7 +26,7 @@ import sys
 import types
 import warnings
 
-__all__ = ["MOVED_MODULES", "DeprecatedModule", "install"]
+__all__ = ["MOVED_MODULES", "MOVED_NAMES", "DeprecatedModule", "install", "moved_attribute"]
 
 #: Old module path -> new module path.
 MOVED_MODULES = {
@@ -35,10 +35,42 @@ MOVED_MODULES = {
     "attitude.splitting": "attitude.propagation.splitting",
     "attitude.integrate": "attitude.propagation.reference",
     "attitude.events": "attitude.propagation.events",
+    "attitude.propagation.elliptic": "attitude.elliptic",
     "attitude.aem": "attitude.formats.aem",
     "attitude.spice": "attitude.formats.spice",
     "attitude.streaming": "attitude.formats.streaming",
 }
+
+#: ``(old module, name)`` -> new module, for single names that moved: the old module's
+#: ``__getattr__`` calls :func:`moved_attribute`.
+MOVED_NAMES = {
+    ("attitude.propagation.splitting", "BodyBatch"): "attitude.body",
+    **{("attitude.propagation.torquefree", name): "attitude.freebody"
+       for name in ("Diagnosis", "diagnose", "diagnose_principal", "diagnose_many",
+                    "branch_of")},
+}
+
+
+def moved_attribute(module: str, name: str):
+    """The value of a name that moved out of ``module``, with a :class:`DeprecationWarning`
+    naming its new home; :class:`AttributeError` for any other name (for a module's
+    ``__getattr__``).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     cls = moved_attribute("attitude.propagation.splitting", "BodyBatch")
+    >>> cls.__module__, str(caught[0].message).endswith("use attitude.body.BodyBatch")
+    ('attitude.body', True)
+    """
+    new = MOVED_NAMES.get((module, name))
+    if new is None:
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+    warnings.warn(f"{module}.{name} is deprecated; use {new}.{name}", DeprecationWarning,
+                  stacklevel=3)
+    return getattr(importlib.import_module(new), name)
 
 
 class DeprecatedModule(types.ModuleType):

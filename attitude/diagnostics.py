@@ -34,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipkm1
 
+from . import freebody as fb
 from . import quaternion as quat
-from .body import SYMMETRY_RTOL, RigidBody
+from .body import SYMMETRY_RTOL, RigidBody, to_principal_frame
 from .ephemeris import Ephemeris
 from .errors import DiagnosticsError, InsufficientDataError
 
@@ -163,9 +164,7 @@ def principal_series(eph: Ephemeris, body_index: int | None = None) -> Principal
         raise DiagnosticsError("time must increase strictly: sort the ephemeris and drop "
                                "duplicate epochs")
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    q_bp = body.body_to_principal.as_quat()                       # body -> principal
-    q_p2i = quat.multiply(q, quat.conjugate(q_bp)[None, :])      # principal -> inertial
-    w_p = quat.rotate(q_bp[None, :], w)
+    q_p2i, w_p = to_principal_frame(q, w, body.body_to_principal.as_quat())
     return PrincipalSeries(t, q_p2i, w_p, body.principal_moments.copy(), body)
 
 
@@ -202,19 +201,21 @@ def invariants(omega: np.ndarray, moments) -> dict[str, np.ndarray]:
     w = np.asarray(omega, dtype=float)
     A, B, C = (float(x) for x in moments)
     w1, w2, w3 = w[..., 0], w[..., 1], w[..., 2]
-    L2 = (A * w1) ** 2 + (B * w2) ** 2 + (C * w3) ** 2
+    # principal axes are the SAM kernel frame (attitude.freebody):
+    # q1c = 2EC - L^2 >= 0, q3a = L^2 - 2EA >= 0, dB = L^2 - 2EB
+    sam = fb.invariants(A, B, C, w1, w2, w3)
+    _, _, _, q1c, q3a, dB, L2 = sam
     E2 = A * w1 * w1 + B * w2 * w2 + C * w3 * w3                  # 2E
-    q1c = A * (C - A) * w1 * w1 + B * (C - B) * w2 * w2           # 2EC - L^2 >= 0
-    q3a = B * (B - A) * w2 * w2 + C * (C - A) * w3 * w3           # L^2 - 2EA >= 0
-    dB = C * (C - B) * w3 * w3 - A * (B - A) * w1 * w1            # L^2 - 2EB
     with np.errstate(invalid="ignore", divide="ignore"):
         L = np.sqrt(L2)
         D = L2 / E2
         exc = A * q1c / (L2 * (C - A)) if C > A else np.full_like(L2, np.nan)
         tri = (B - A) > SYMMETRY_RTOL * C and (C - B) > SYMMETRY_RTOL * C
         if tri:
-            m1_sam = (C - A) * dB / ((C - B) * q3a)                  # (D 7)
-            m1_lam = (C - A) * dB / ((B - A) * q1c)
+            m1_sam = fb.jacobi_parameters(A, B, C, *sam[:6])[1]      # (D 7)
+            # the LAM kernel frame's m1, negative on the LAM side
+            lam = fb.invariants(C, B, A, *fb.kernel_vector(w1, w2, w3, True))
+            m1_lam = -fb.jacobi_parameters(C, B, A, *lam[:6])[1]
             m1 = np.where(dB >= 0, m1_sam, m1_lam)
             m1 = np.where(L2 > 0, np.clip(m1, -1.0, 1.0), np.nan)
             s2c = np.clip(B * q1c / ((C - B) * L2), 0.0, 1.0)         # (D 8)
@@ -252,15 +253,12 @@ def osculating_polhode_period(omega: np.ndarray, moments) -> np.ndarray:
             Is, It, ws = (C, 0.5 * (A + B), w3) if oblate else (A, 0.5 * (B + C), w1)
             Om = np.abs(ws * (It - Is) / It)
             return np.where(Om > 0, _TWO_PI / Om, np.inf)
-        q1c = A * (C - A) * w1 * w1 + B * (C - B) * w2 * w2           # 2EC - L^2
-        q3a = B * (B - A) * w2 * w2 + C * (C - A) * w3 * w3           # L^2 - 2EA
-        dB = C * (C - B) * w3 * w3 - A * (B - A) * w1 * w1            # L^2 - 2EB
-        sam = dB >= 0
-        # kernel-frame quantities (TF 3-6): SAM (A, B, C), LAM (C, B, A)
-        d32 = np.where(sam, C - B, B - A)
-        Q3 = np.where(sam, q3a, q1c)
-        lam = np.sqrt(d32 * Q3 / (A * B * C))
-        m1 = (C - A) * np.abs(dB) / (d32 * Q3)
+        # kernel frame (attitude.freebody, TF 3-6): SAM (A, B, C), LAM (C, B, A)
+        on_lam = fb.separatrix_gap(A, B, C, w1, w3) < 0
+        I1, I2, I3 = fb.kernel_moments(A, B, C, on_lam)
+        inv = fb.invariants(I1, I2, I3, *fb.kernel_vector(w1, w2, w3, on_lam))
+        _, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, *inv[:6])
+        lam = np.sqrt(lam2)
         m1 = np.clip(m1, 0.0, 1.0)
         K = ellipkm1(m1)                                               # K(m), m = 1 - m1
         P = 4.0 * K / lam
@@ -289,12 +287,10 @@ def _adapted(q_p2i: np.ndarray, omega: np.ndarray, reference_axis: int):
         return q_p2i, omega
     if reference_axis != 1:
         raise DiagnosticsError(f"reference_axis must be 1 (A) or 3 (C), got {reference_axis!r}")
-    # adapted -> principal: x' = C axis (e3), y' = -e2, z' = A axis (e1); quaternion of the
-    # rotation by pi about (e1 + e3)/sqrt 2: (1/sqrt2, 0, 1/sqrt2, 0)
-    s = math.sqrt(0.5)
-    q_a2p = np.array([s, 0.0, s, 0.0])
-    w = np.stack([omega[..., 2], -omega[..., 1], omega[..., 0]], axis=-1)
-    return quat.multiply(q_p2i, q_a2p), w
+    # adapted -> principal: the LAM kernel frame of attitude.freebody, x' = C axis (e3),
+    # y' = -e2, z' = A axis (e1)
+    w = np.stack(fb.kernel_vector(omega[..., 0], omega[..., 1], omega[..., 2], True), axis=-1)
+    return quat.multiply(q_p2i, np.array(fb.LAM_FRAME)), w
 
 
 # ===========================================================================

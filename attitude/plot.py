@@ -40,7 +40,7 @@ from .diagnostics import (
     reference_axis_for,
 )
 from .errors import AttitudeError, PlotUnavailableError
-from .propagation.torquefree import diagnose_many
+from .freebody import diagnose_many
 from .quaternion import rotate
 from .statistics import attitude_spread
 

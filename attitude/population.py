@@ -34,15 +34,14 @@ import warnings
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
-from astropy import units as u
 from scipy.spatial.transform import Rotation
 
 from . import quaternion as quat
-from .body import TRIANGLE_RTOL, RigidBody, diagonal_inertia
+from .body import RigidBody, as_bodies, check_inertia, diagonal_inertia, principal_quaternions
 from .errors import InvalidBodiesWarning, InvalidInertiaError, InvalidStateError
 from .quantities import to_si
 from .sampling import draw, invalid_where
-from .state import AttitudeState, as_epoch, check_frame
+from .state import AttitudeState, as_epoch, check_frame, stack_states
 from .tables import ensemble_columns
 
 __all__ = ["Ensemble", "check_batch"]
@@ -367,25 +366,26 @@ class Ensemble:
 
 def check_batch(bodies, states) -> tuple[list[RigidBody], list[AttitudeState]]:
     """Equal-length, non-empty sequences of bodies and states sharing one epoch and
-    frame, as lists; otherwise :class:`~attitude.InvalidStateError` naming the index."""
+    frame, as lists; otherwise :class:`~attitude.InvalidStateError` naming the index.
+
+    The checks are those of the batch normalisers :func:`attitude.body.as_bodies` and
+    :func:`attitude.state.stack_states`.
+
+    Examples
+    --------
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> state = AttitudeState("2029-04-13", Rotation.identity(), [0.0, 0.0, 1.0])
+    >>> [len(x) for x in check_batch([body, body], [state, state])]
+    [2, 2]
+    """
     bodies, states = list(bodies), list(states)
     if len(bodies) != len(states) or not bodies:
         raise InvalidStateError(f"batch: got {len(bodies)} bodies and {len(states)} "
                                 "states; give one state per body")
-    for i, (b, s) in enumerate(zip(bodies, states)):
-        if not isinstance(b, RigidBody):
-            raise InvalidStateError(f"bodies[{i}]: expected a RigidBody, got "
-                                    f"{type(b).__name__}")
-        if not isinstance(s, AttitudeState):
-            raise InvalidStateError(f"states[{i}]: expected an AttitudeState, got "
-                                    f"{type(s).__name__}")
-        if s.frame != states[0].frame:
-            raise InvalidStateError(f"states[{i}].frame = {s.frame} differs from "
-                                    f"states[0].frame = {states[0].frame}")
-        if abs((s.epoch - states[0].epoch).to_value(u.s)) > 0:
-            raise InvalidStateError(f"states[{i}].epoch differs from states[0].epoch; "
-                                    "a batch shares one epoch")
-    return bodies, states
+    batch, _ = as_bodies(bodies, moments=False)
+    stack_states(states, len(batch))
+    return list(batch), states
 
 
 def _check_rows(inertia, quaternion, omega):
@@ -398,32 +398,14 @@ def _check_rows(inertia, quaternion, omega):
         for i, why in invalid_where(mask, reason).items():
             invalid.setdefault(i, why)
 
-    finite = np.all(np.isfinite(inertia), axis=(1, 2))
-    flag(~finite, lambda i: "inertia has a non-finite element; give finite kg m^2 values")
-    scale = np.where(finite, np.abs(np.where(np.isfinite(inertia), inertia, 0)).max(axis=(1, 2)),
-                     1.0)
-    asym = np.abs(inertia - inertia.transpose(0, 2, 1)).max(axis=(1, 2)) if n else []
-    flag(finite & (asym > 1e-12 * np.maximum(scale, 1e-300)),
-         lambda i: "inertia is not symmetric; give the tensor with I_ij = I_ji")
-    good = np.array([i not in invalid for i in range(n)], dtype=bool)
-    safe = np.where(good[:, None, None], inertia, np.eye(3))
-    safe = 0.5 * (safe + safe.transpose(0, 2, 1))
-    moments, axes = np.linalg.eigh(safe)
-    A, B, C = moments[:, 0], moments[:, 1], moments[:, 2]
-    flag(good & ~(A > 0), lambda i: f"inertia is not positive-definite (smallest principal "
-         f"moment {moments[i, 0]:.6g} kg m^2)")
-    flag(good & (A > 0) & (A + B < C * (1 - TRIANGLE_RTOL)),
-         lambda i: f"principal moments {moments[i, 0]:.6g}, {moments[i, 1]:.6g}, "
-                   f"{moments[i, 2]:.6g} kg m^2 violate the triangle inequality A + B >= C")
+    moments, axes, inertia_invalid = check_inertia(inertia)    # the one inertia validator
+    invalid.update(inertia_invalid)
     qn = np.linalg.norm(quaternion, axis=1)
     flag(~(np.isfinite(qn) & (qn > 0)),
          lambda i: "quaternion must be finite and non-zero (x, y, z, w)")
     flag(~np.all(np.isfinite(omega), axis=1),
          lambda i: "omega_body has a NaN or infinite component; give finite rad/s")
-    # proper rotation: principal axes as columns, det +1
-    det = np.linalg.det(axes)
-    axes[:, :, 2] *= np.where(det < 0, -1.0, 1.0)[:, None]
-    b2p = Rotation.from_matrix(axes.transpose(0, 2, 1)).as_quat()
+    b2p = principal_quaternions(axes)
     bad = np.zeros(n, dtype=bool)
     bad[list(invalid)] = True
     moments[bad] = [1.0, 2.0, 2.5]

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from . import quaternion as quat
 from .errors import InvalidStateError
-from .propagation.torquefree import diagnose_many
+from .freebody import diagnose_many
 from .quantities import to_si
 from .state import direction_frame, spin_axis_quaternion
 

@@ -33,12 +33,12 @@ from .errors import (
     ScenarioError,
     TorqueConfigError,
 )
+from .freebody import diagnose
 from .photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
 from .photometry.config import parse_photometry
 from .population import Ensemble
 from .propagation.batch import STATUS_FAILED, STATUS_OK
 from .propagation.propagator import METHODS, propagate
-from .propagation.torquefree import diagnose
 from .quantities import parse_quantity
 from .regimes import PERIOD_KEYS, REGIMES
 from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS

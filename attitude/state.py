@@ -13,6 +13,7 @@ import difflib
 from dataclasses import dataclass
 
 import numpy as np
+from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
@@ -21,7 +22,7 @@ from .errors import InvalidStateError
 from .quantities import to_si
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
-           "direction_frame", "spin_axis_quaternion"]
+           "direction_frame", "spin_axis_quaternion", "stack_states"]
 
 #: Inertial frame labels accepted (case-insensitive).  No frame conversion is ever done:
 #: the label travels with the data.  ``INERTIAL`` is a generic label for synthetic studies.
@@ -271,3 +272,70 @@ class AttitudeState:
                 f"quat_xyzw={np.array2string(q, precision=6)}, "
                 f"omega_body={np.array2string(self.omega_body, precision=6)} rad/s, "
                 f"frame={self.frame})")
+
+
+def stack_states(states, n: int | None = None
+                 ) -> tuple[Time, str, np.ndarray, np.ndarray]:
+    """The one batch normaliser of states: a sequence of :class:`AttitudeState` sharing
+    one epoch and frame -> ``(epoch, frame, quaternion (N, 4), omega_body (N, 3))``.
+
+    The epochs are compared in one array operation on their two-part Julian dates, each
+    distinct ``Time`` object once (the states of a batch normally share one epoch
+    object; a state in another scale is compared through astropy on its own).
+
+    Parameters
+    ----------
+    states : sequence of AttitudeState
+    n : int, optional
+        The number of bodies the states go with.
+
+    Raises
+    ------
+    InvalidStateError
+        Naming the index of a state that is not an ``AttitudeState`` or whose epoch or
+        frame differs from the first.
+
+    Examples
+    --------
+    >>> from scipy.spatial.transform import Rotation
+    >>> s = AttitudeState("2029-04-13", Rotation.identity(), [0.0, 0.0, 1.0])
+    >>> epoch, frame, q, w = stack_states([s, s])
+    >>> frame, q.shape, w.shape
+    ('ICRF', (2, 4), (2, 3))
+    """
+    states = list(states)
+    if not states or (n is not None and len(states) != n):
+        raise InvalidStateError(f"batch: got {n} bodies and {len(states)} states; give one "
+                                "state per body")
+    for i, s in enumerate(states):
+        if not isinstance(s, AttitudeState):
+            raise InvalidStateError(f"states[{i}]: expected an AttitudeState, got "
+                                    f"{type(s).__name__}")
+    first = states[0]
+    epoch, frame = first.epoch, first.frame
+    for i, s in enumerate(states):
+        if s.frame != frame:
+            raise InvalidStateError(f"states[{i}].frame = {s.frame} differs from "
+                                    f"states[0].frame = {frame}")
+    # The epochs of a batch are usually one Time object shared by all states: compare
+    # each distinct object once (reading a Time's Julian date costs ~50 us).
+    distinct: dict[int, int] = {}
+    for i, s in enumerate(states):
+        if s.epoch is not epoch:
+            distinct.setdefault(id(s.epoch), i)
+    rows = np.array(list(distinct.values()), dtype=int)
+    others = [states[i].epoch for i in rows]
+    same_scale = np.array([e.scale == epoch.scale for e in others], dtype=bool)
+    jd1 = np.array([e.jd1 if ok else 0.0 for e, ok in zip(others, same_scale)], dtype=float)
+    jd2 = np.array([e.jd2 if ok else 0.0 for e, ok in zip(others, same_scale)], dtype=float)
+    # the same instant in the same scale: the two-part Julian dates differ by exactly 0
+    differs = same_scale & (((jd1 - epoch.jd1) + (jd2 - epoch.jd2)) != 0.0)
+    for k in np.flatnonzero(~same_scale):
+        differs[k] = abs((others[k] - epoch).to_value(u.s)) > 0
+    if differs.any():
+        i = int(rows[np.argmax(differs)])
+        raise InvalidStateError(f"states[{i}].epoch differs from states[0].epoch; a batch "
+                                "shares one epoch")
+    quaternion = np.stack([s.attitude.as_quat() for s in states])     # body -> inertial
+    omega = np.stack([s.omega_body for s in states])
+    return epoch, frame, quaternion, omega

@@ -16,9 +16,9 @@ import xarray as xr
 from .classify import classify
 from .ephemeris import Ephemeris
 from .errors import AttitudeError, InvalidStateError
+from .freebody import diagnose_many
 from .population import Ensemble
 from .propagation.batch import STATUS_INVALID, STATUS_OK
-from .propagation.torquefree import diagnose_many
 
 __all__ = ["diagnose_ensemble", "classify_ensemble", "regime_fractions", "period_quantiles",
            "attitude_spread", "spread_quantiles"]
@@ -26,7 +26,7 @@ __all__ = ["diagnose_ensemble", "classify_ensemble", "regime_fractions", "period
 
 def diagnose_ensemble(ensemble: Ensemble) -> xr.Dataset:
     """Analytic torque-free diagnosis of every body (vectorised
-    :func:`attitude.propagation.torquefree.diagnose_many`): a Dataset along ``body`` with
+    :func:`attitude.freebody.diagnose_many`): a Dataset along ``body`` with
     ``regime``, the periods ``polhode precession rotation spin`` (s, NaN where absent),
     ``energy_ratio``, ``separatrix_distance``, ``nutation_min``/``nutation_max`` (rad) and
     ``valid``.

@@ -59,6 +59,7 @@ from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
+from . import quaternion as quat
 from .body import SYMMETRY_RTOL, RigidBody
 from .errors import OrbitError, TorqueConfigError
 from .orbit import KeplerOrbit, as_path
@@ -121,26 +122,6 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     if a.ndim == 1 and b.ndim == 1:
         return np.dot(a, b)
     return np.sum(a * b, axis=-1)
-
-
-def _rotate(q: np.ndarray, v: np.ndarray, sign: float) -> np.ndarray:
-    """Rotate ``v`` by the unit quaternion ``q`` (``sign = 1``) or by its inverse
-    (``sign = -1``): ``v' = v + 2 w (u x v) + 2 u x (u x v)``, ``q = (u, w)``."""
-    if q.ndim == 1 and v.ndim == 1:
-        x, y, z, w = q.tolist()
-        x, y, z = sign * x, sign * y, sign * z
-        v0, v1, v2 = v.tolist()
-        t0, t1, t2 = 2 * (y * v2 - z * v1), 2 * (z * v0 - x * v2), 2 * (x * v1 - y * v0)
-        return np.array([v0 + w * t0 + y * t2 - z * t1, v1 + w * t1 + z * t0 - x * t2,
-                         v2 + w * t2 + x * t1 - y * t0])
-    uu, w = sign * q[..., :3], q[..., 3:]
-    t = 2.0 * _cross(uu, v)
-    return v + w * t + _cross(uu, t)
-
-
-def _to_body(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Inertial vectors ``v`` in body axes (``q`` body -> inertial, scalar-last)."""
-    return _rotate(q, v, -1.0)
 
 
 def _unit_quaternion(quaternion) -> np.ndarray:
@@ -489,7 +470,7 @@ class GravityGradient(TorqueModel):
 
     def evaluate(self, t, quaternion, omega_body, body):
         r = self.orbit.position(t)
-        r_b = _to_body(quaternion, r)
+        r_b = quat.rotate(quaternion, r, inverse=True)
         r2 = _dot(r_b, r_b)[..., None]
         Ir = _matvec(_inertia_of(body), r_b)
         return 3.0 * self.mu / (r2 * r2 * np.sqrt(r2)) * _cross(r_b, Ir)
@@ -504,7 +485,7 @@ class GravityGradient(TorqueModel):
         """
         t = np.asarray(t, dtype=float)
         q = _unit_quaternion(quaternion)
-        r_b = _to_body(q, self.orbit.position(t))
+        r_b = quat.rotate(q, self.orbit.position(t), inverse=True)
         r2 = _dot(r_b, r_b)
         inertia = _inertia_of(body)
         trace = np.trace(inertia, axis1=-2, axis2=-1)
@@ -544,7 +525,7 @@ class ConstantTorque(TorqueModel):
     def evaluate(self, t, quaternion, omega_body, body):
         if self.frame == "body":
             return self.torque.copy()
-        return _to_body(quaternion, self.torque)
+        return quat.rotate(quaternion, self.torque, inverse=True)
 
     def __repr__(self) -> str:
         return f"ConstantTorque({self.torque.tolist()} N m, frame={self.frame!r})"
@@ -866,7 +847,7 @@ class EddyCurrentDamping(TorqueModel):
         return cls(2.0 * np.pi / 15.0 * sigma * R**5, field)
 
     def evaluate(self, t, quaternion, omega_body, body):
-        B = _to_body(quaternion, np.asarray(self.field(t), dtype=float))
+        B = quat.rotate(quaternion, np.asarray(self.field(t), dtype=float), inverse=True)
         x = _cross(omega_body, B)
         Mx = self.magnetic_tensor * x if self.isotropic else x @ self.magnetic_tensor.T
         return _cross(Mx, B)
@@ -935,7 +916,7 @@ class HeavyTopPivot(TorqueModel):
         if mass is None:
             raise TorqueConfigError("the body has no mass: give HeavyTopPivot a "
                                     "mass, or build the body with one", key="mass")
-        up_b = _to_body(quaternion, self.up)
+        up_b = quat.rotate(quaternion, self.up, inverse=True)
         return np.asarray(mass)[..., None] * self.g * _cross(up_b, self.pivot_to_com)
 
     def __repr__(self) -> str:

@@ -91,7 +91,7 @@ def errors(moments, w, periods, dps):
     for n in periods:
         t = np.concatenate([[0.0], np.sort(rng.uniform(0, n * P, 6)), [n * P]])
         qc, wc = O.closed_form_solution(moments, w, Q0, t, dps=dps)
-        qf, wf = free_rotation(moments, w, Q0, t)
+        qf, wf = free_rotation(moments, Q0, w, t)
         out.append((O.attitude_error(qf, qc).max(), O.rate_error(wf, wc)))
     with np.errstate(invalid="ignore"):
         naive = O.rate_error(naive_rates(moments, w, t), wc)
@@ -119,7 +119,7 @@ def main():
     T = 10 * 2 * math.pi / np.linalg.norm(w)
     t = np.linspace(0.0, T, 9)
     qt, wt, _ = O.taylor_solution(I, w, Q0, t, dps=32, order=40)
-    qf, wf = free_rotation(I, w, Q0, t)
+    qf, wf = free_rotation(I, Q0, w, t)
     print(f"| 0 (exact; A:B:C = 1:2.5:4, 10 spin periods, Taylor oracle) | "
           f"{O.attitude_error(qf, qt).max():.1e} / {O.rate_error(wf, wt):.1e} | | | n/a |")
     print()
@@ -146,7 +146,7 @@ def shape_sweep():
                     P = O.polhode_period(I, w)
                     t = np.concatenate([[0.0], np.sort(rng.uniform(0, 50 * P, 6)), [50 * P]])
                     qc, wc = O.closed_form_solution(I, w, Q0, t)
-                    qf, wf = free_rotation(I, w, Q0, t)
+                    qf, wf = free_rotation(I, Q0, w, t)
                     wa = max(wa, O.attitude_error(qf, qc).max())
                     wr = max(wr, O.rate_error(wf, wc))
                     span = max(span, 50 * P * np.linalg.norm(w))

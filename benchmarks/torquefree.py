@@ -32,7 +32,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
-from attitude.propagation.torquefree import branch_of, free_rotation  # noqa: E402
+from attitude.freebody import branch_of  # noqa: E402
+from attitude.propagation.torquefree import free_rotation  # noqa: E402
 
 
 def best_of(fn, repeat=3):
@@ -69,7 +70,7 @@ def main():
     w1 = np.array([math.sqrt(x), 0.0, 1.0]) * 2 * math.pi / (27.38 * 3600) * 0.9
     q1 = np.array([0.0, 0.0, 0.0, 1.0])
     t1 = np.arange(1_000_000) * 600.0
-    ours1 = best_of(lambda: free_rotation(I1, w1, q1, t1))
+    ours1 = best_of(lambda: free_rotation(I1, q1, w1, t1))
     frac = 50
     ts = t1[: len(t1) // frac]
     dop1 = best_of(lambda: dop853(I1, w1, q1, ts), repeat=1) * frac
@@ -89,7 +90,7 @@ def main():
     q2 = rng.normal(size=(n, 4))
     q2 /= np.linalg.norm(q2, axis=1, keepdims=True)
     t2 = np.linspace(0.0, 3e4, T)
-    ours2 = best_of(lambda: free_rotation(I2, w2, q2, t2))
+    ours2 = best_of(lambda: free_rotation(I2, q2, w2, t2))
     sub = 100
     dop2 = best_of(lambda: [dop853(I2[i], w2[i], q2[i], t2) for i in range(sub)], repeat=1)
     dop2 *= n / sub

@@ -247,3 +247,15 @@ def test_explorer_1_cylinder_with_four_whip_antennas():
     # four-fold symmetry about the axis: a prolate axisymmetric body, A about the axis
     assert body.symmetry == "prolate"
     assert body.principal_moments[0] == pytest.approx(Iz, rel=1e-12)
+
+
+def test_body_batch_moved_from_splitting_warns():
+    """``BodyBatch`` moved to attitude.body (the batch normaliser); the old path warns."""
+    import attitude.body
+    import attitude.propagation.splitting as splitting
+
+    with pytest.warns(DeprecationWarning, match="use attitude.body.BodyBatch"):
+        cls = splitting.BodyBatch
+    assert cls is attitude.body.BodyBatch
+    batch, single = attitude.body.as_bodies([RigidBody.from_principal_moments([1, 2, 3])] * 3)
+    assert isinstance(batch, cls) and not single and batch.principal_moments.shape == (3, 3)

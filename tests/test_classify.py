@@ -30,8 +30,8 @@ from attitude.classify import (
     lyapunov_exponent,
 )
 from attitude.diagnostics import InsufficientDataError
+from attitude.freebody import diagnose_principal
 from attitude.orbit import KeplerOrbit
-from attitude.propagation.torquefree import diagnose_principal
 from attitude.torques import ConstantTorque, EnergyDissipation, GravityGradient
 
 EPOCH = "2030-01-01T00:00:00"

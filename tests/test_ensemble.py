@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude import ensemble as en
-from attitude.propagation.torquefree import diagnose, diagnose_many, diagnose_principal
+from attitude.freebody import diagnose, diagnose_many, diagnose_principal
 
 EPOCH = "2029-04-13T00:00:00"
 APOPHIS = {"angular_momentum_ra": 250 * u.deg, "angular_momentum_dec": -75 * u.deg,

@@ -12,7 +12,7 @@ import pytest
 
 import attitude as att
 from attitude import ensemble as en
-from attitude.propagation.torquefree import diagnose
+from attitude.freebody import diagnose
 from attitude.scenario import load_scenario, run_scenario
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -23,11 +23,11 @@ import numpy as np
 import pytest
 
 from attitude.errors import InvalidInertiaError, InvalidStateError
+from attitude.freebody import branch_of
 from attitude.propagation.torquefree import (
     PURE_SPIN_TOL,
     RTOL_AXISYMMETRIC,
     SEPARATRIX_M1_TOL,
-    branch_of,
     free_rotation,
 )
 
@@ -135,7 +135,7 @@ def test_accuracy_50_periods_vs_closed_form_oracle(AC):
                 assert abs(O.separatrix_m1(I, w)) >= 0.9e-3
                 t = sample_times(O.polhode_period(I, w), 50, seed=k)
                 qc, wc = O.closed_form_solution(I, w, Q0, t)
-                qf, wf = free_rotation(I, w, Q0, t)
+                qf, wf = free_rotation(I, Q0, w, t)
                 worst_att = max(worst_att, O.attitude_error(qf, qc).max())
                 worst_rate = max(worst_rate, O.rate_error(wf, wc))
     assert worst_att <= 1e-12, worst_att
@@ -151,7 +151,7 @@ def test_very_long_spans(n_periods):
     I, w = [1.0, 2.0, 3.0], [1.0, 0.2, -0.3]
     t = np.array([0.0, n_periods * O.polhode_period(I, w) * 1.0000037])
     qc, wc = O.closed_form_solution(I, w, Q0, t, dps=50)
-    qf, wf = free_rotation(I, w, Q0, t)
+    qf, wf = free_rotation(I, Q0, w, t)
     angle = t[-1] * np.linalg.norm(w)
     rel = 1e-18 if np.finfo(np.longdouble).eps < 1e-18 else 1e-15
     assert O.attitude_error(qf, qc).max() <= rel * angle + 1e-14
@@ -168,7 +168,7 @@ def test_separatrix_1e6_50_periods(moments, side):
     w = state_at(moments, 1e-6, side)
     t = sample_times(O.polhode_period(moments, w), 50, seed=1)
     qc, wc = O.closed_form_solution(moments, w, Q0, t)
-    qf, wf = free_rotation(moments, w, Q0, t)
+    qf, wf = free_rotation(moments, Q0, w, t)
     assert O.attitude_error(qf, qc).max() <= 1e-10
     assert O.rate_error(wf, wc) <= 1e-12
 
@@ -184,7 +184,7 @@ def test_separatrix_close_10_periods(dist, side):
         P = O.polhode_period(I, w, dps=60)
     t = sample_times(P, 10, seed=2)
     qc, wc = O.closed_form_solution(I, w, Q0, t, dps=60)
-    qf, wf = free_rotation(I, w, Q0, t)
+    qf, wf = free_rotation(I, Q0, w, t)
     assert np.isfinite(qf).all() and np.isfinite(wf).all()
     assert O.attitude_error(qf, qc).max() <= 1e-8
     assert O.rate_error(wf, wc) <= 1e-8
@@ -199,7 +199,7 @@ def test_exactly_on_separatrix(omega):
     T = 10 * 2 * math.pi / np.linalg.norm(omega)
     t = np.linspace(0.0, T, 9)
     qt, wt, _ = O.taylor_solution(I, omega, Q0, t, dps=32, order=40)
-    qf, wf = free_rotation(I, omega, Q0, t)
+    qf, wf = free_rotation(I, Q0, omega, t)
     assert np.isfinite(qf).all()
     assert O.attitude_error(qf, qt).max() <= 1e-8
     assert O.rate_error(wf, wt) <= 1e-8
@@ -219,7 +219,7 @@ def test_extremely_close_to_separatrix_vs_taylor(m1):
     w = [w1, 0.5, 1.0]
     t = np.linspace(0.0, 5.0, 6)
     qt, wt, _ = O.taylor_solution(I, w, Q0, t, dps=32, order=40)
-    qf, wf = free_rotation(I, w, Q0, t)
+    qf, wf = free_rotation(I, Q0, w, t)
     assert O.attitude_error(qf, qt).max() <= 1e-13
     assert O.rate_error(wf, wt) <= 1e-13
 
@@ -261,7 +261,7 @@ def test_edge_regimes_vs_taylor(name):
     wn = np.linalg.norm(w)
     t = np.linspace(-6.0, 12.0, 10) / (wn if wn > 0 else 1.0)
     fwd = t >= 0
-    qf, wf = free_rotation(I, w, Q0, t)
+    qf, wf = free_rotation(I, Q0, w, t)
     assert np.isfinite(qf).all() and np.isfinite(wf).all()
     qt, wt, _ = O.taylor_solution(I, w, Q0, t[fwd])
     assert O.attitude_error(qf[fwd], qt).max() <= 1e-14
@@ -300,14 +300,14 @@ def test_continuity_pure_spin_boundary():
     """Just inside / outside PURE_SPIN_TOL: the two branches agree."""
     t = np.linspace(0, 50, 11)
     # |L| = 3, threshold 3e-150 on the second largest body component of L
-    a = free_rotation([1, 2, 3], [3.01e-150, 0, 1], Q0, t)
-    b = free_rotation([1, 2, 3], [2.99e-150, 0, 1], Q0, t)
+    a = free_rotation([1, 2, 3], Q0, [3.01e-150, 0, 1], t)
+    b = free_rotation([1, 2, 3], Q0, [2.99e-150, 0, 1], t)
     assert branch_of([1, 2, 3], [3.01e-150, 0, 1]) == "SAM"
     assert branch_of([1, 2, 3], [2.99e-150, 0, 1]) == "precession"
     _close(a, b, 1e-14)
     for w in ([1, 1e-149, 0], [0, 1, 1e-149]):  # about A (LAM side), about B (SAM side)
-        a = free_rotation([1, 2, 3], w, Q0, t)
-        b = free_rotation([1, 2, 3], [x if x != 1e-149 else 0.0 for x in w], Q0, t)
+        a = free_rotation([1, 2, 3], Q0, w, t)
+        b = free_rotation([1, 2, 3], Q0, [x if x != 1e-149 else 0.0 for x in w], t)
         _close(a, b, 1e-14)
 
 
@@ -317,13 +317,13 @@ def test_continuity_axisymmetric_boundary():
     # the physical difference grows like (d/C) |omega| t: 1e-13 over t = 100
     t = np.linspace(0, 100, 11)
     for w in ([0.3, 0.2, 1.0], [0.3, 0.2, 1e-3], [0.3, 0.2, 0.0]):
-        ref = free_rotation([1, 1, 2], w, Q0, t)
+        ref = free_rotation([1, 1, 2], Q0, w, t)
         for d in (3 * EPS, 7 * EPS, 9 * EPS, 1e-13):
-            _close(free_rotation([1, 1 + d, 2], w, Q0, t), ref, 1e-13 + 50 * d * 100)
+            _close(free_rotation([1, 1 + d, 2], Q0, w, t), ref, 1e-13 + 50 * d * 100)
     for w in ([1.0, 0.2, 0.3], [1e-3, 0.2, 0.3], [0.0, 0.2, 0.3]):
-        ref = free_rotation([1, 2, 2], w, Q0, t)
+        ref = free_rotation([1, 2, 2], Q0, w, t)
         for d in (6 * EPS, 8 * EPS, 10 * EPS, 1e-13):
-            _close(free_rotation([1, 2, 2 + d], w, Q0, t), ref, 1e-13 + 50 * d * 100)
+            _close(free_rotation([1, 2, 2 + d], Q0, w, t), ref, 1e-13 + 50 * d * 100)
 
 
 def test_continuity_across_separatrix():
@@ -332,11 +332,11 @@ def test_continuity_across_separatrix():
     1-ulp perturbation near the saddle (lambda = 1.37 here), nothing more."""
     I = [1.0, 2.5, 4.0]
     t = np.linspace(0.0, 6.0, 13)
-    exact = free_rotation(I, [2.0, 0.5, 1.0], Q0, t)
+    exact = free_rotation(I, Q0, [2.0, 0.5, 1.0], t)
     for w1 in (np.nextafter(2.0, 3.0), np.nextafter(2.0, 1.0)):
         w = [w1, 0.5, 1.0]
         assert branch_of(I, w) in ("SAM", "LAM")
-        _close(free_rotation(I, w, Q0, t), exact, 1e-15 * math.exp(1.37 * 6.0))
+        _close(free_rotation(I, Q0, w, t), exact, 1e-15 * math.exp(1.37 * 6.0))
 
 
 @pytest.mark.parametrize("w3, branch, lt_max", [(1e-100, "SAM", 500.0),
@@ -351,7 +351,7 @@ def test_separatrix_tolerance_boundary(w3, branch, lt_max):
     lam = math.sqrt(1.0 * 2.0 / (1.0 * 2.0 * 3.0)) * 1.0  # sqrt((C-B)(L^2-2EA)/ABC)
     t = np.linspace(0.0, lt_max / lam, 6)
     qc, wc = O.closed_form_solution(I, w, Q0, t, dps=250)
-    qf, wf = free_rotation(I, w, Q0, t)
+    qf, wf = free_rotation(I, Q0, w, t)
     assert O.attitude_error(qf, qc).max() <= 1e-10
     assert O.rate_error(wf, wc) <= 1e-10
 
@@ -401,7 +401,7 @@ def test_property_finite_unit_conservative(bs, span):
     wn = norm(w)
     t = np.linspace(-span, span, 41) / max(wn, 1e-300)
     t[20] = 0.0
-    q, wt = free_rotation(I, w, q0, t)
+    q, wt = free_rotation(I, q0, w, t)
     assert np.isfinite(q).all() and np.isfinite(wt).all()
     assert np.max(np.abs(np.linalg.norm(q, axis=-1) - 1.0)) <= 8 * EPS
     assert O.attitude_error(q[20], q0) < 4 * EPS
@@ -424,9 +424,9 @@ def test_property_batch_equals_single(items):
     W = np.array([x[1] for x in items])
     Q = np.array([x[2] for x in items])
     t = np.linspace(0.0, 40.0, 17)
-    qb, wb = free_rotation(I, W, Q, t)
+    qb, wb = free_rotation(I, Q, W, t)
     for i in range(len(items)):
-        qs, ws = free_rotation(I[i], W[i], Q[i], t)
+        qs, ws = free_rotation(I[i], Q[i], W[i], t)
         assert O.attitude_error(qb[i], qs).max() <= 1e-13
         assert np.max(np.abs(wb[i] - ws)) <= 1e-14 * np.abs(ws).max()
 
@@ -445,9 +445,9 @@ def test_property_semigroup(bs, t1, t2):
     A, B, C = I
     lam_s = math.sqrt(max((C - B) * (B - A), 0.0) / (A * C))  # per unit |omega| t
     hypothesis.assume(lam_s * abs(t2) < 10.0)
-    q1, w1 = free_rotation(I, w, q0, [t1 * s])
-    q2, w2 = free_rotation(I, w1[0], q1[0], [t2 * s])
-    q12, w12 = free_rotation(I, w, q0, [(t1 + t2) * s])
+    q1, w1 = free_rotation(I, q0, w, [t1 * s])
+    q2, w2 = free_rotation(I, q1[0], w1[0], [t2 * s])
+    q12, w12 = free_rotation(I, q0, w, [(t1 + t2) * s])
     assert O.attitude_error(q2, q12).max() <= 1e-10
     assert np.max(np.abs(w2 - w12)) <= 1e-10 * wn
 
@@ -473,7 +473,7 @@ def test_property_vs_dop853(bs):
     t = np.linspace(0.0, 5.0 / wn, 6)
     sol = solve_ivp(rhs, (0, t[-1]), np.concatenate([w, q0]), method="DOP853", rtol=1e-12,
                     atol=1e-14 * wn, t_eval=t)
-    q, wt = free_rotation(I, w, q0, t)
+    q, wt = free_rotation(I, q0, w, t)
     assert O.attitude_error(q, sol.y[3:].T).max() <= 1e-8
     assert np.max(np.abs(wt - sol.y[:3].T)) <= 1e-8 * wn
 
@@ -483,29 +483,40 @@ def test_property_vs_dop853(bs):
 # ---------------------------------------------------------------------------
 def test_shapes():
     t = np.linspace(0, 10, 7)
-    q, w = free_rotation([1, 2, 3], [0.3, 0.2, 1], Q0, t)
+    q, w = free_rotation([1, 2, 3], Q0, [0.3, 0.2, 1], t)
     assert q.shape == (7, 4) and w.shape == (7, 3)
     I = np.tile([1.0, 2.0, 3.0], (2, 3, 1))
     W = np.random.default_rng(0).normal(size=(2, 3, 3))
-    q, w = free_rotation(I, W, Q0, t)
+    q, w = free_rotation(I, Q0, W, t)
     assert q.shape == (2, 3, 7, 4) and w.shape == (2, 3, 7, 3)
     tt = np.stack([t, 2 * t, -t])  # per-body times, (3, T)
-    q, w = free_rotation(I[0], W[0], Q0, tt)
+    q, w = free_rotation(I[0], Q0, W[0], tt)
     for i in range(3):
-        qs, ws = free_rotation(I[0, i], W[0, i], Q0, tt[i])
+        qs, ws = free_rotation(I[0, i], Q0, W[0, i], tt[i])
         assert O.attitude_error(q[i], qs).max() < 1e-14
-    q, w = free_rotation([1, 2, 3], [0.3, 0.2, 1], Q0, 5.0)
+    q, w = free_rotation([1, 2, 3], Q0, [0.3, 0.2, 1], 5.0)
     assert q.shape == (1, 4)
 
 
 def test_input_errors():
     with pytest.raises(InvalidInertiaError):
-        free_rotation([3, 2, 1], [0, 0, 1], Q0, [0.0])
+        free_rotation([3, 2, 1], Q0, [0, 0, 1], [0.0])
     with pytest.raises(InvalidInertiaError):
-        free_rotation([0, 2, 3], [0, 0, 1], Q0, [0.0])
+        free_rotation([0, 2, 3], Q0, [0, 0, 1], [0.0])
     with pytest.raises(InvalidStateError):
-        free_rotation([1, 2, 3], [np.nan, 0, 1], Q0, [0.0])
+        free_rotation([1, 2, 3], Q0, [np.nan, 0, 1], [0.0])
     with pytest.raises(InvalidStateError):
-        free_rotation([1, 2, 3], [0, 0, 1], [0, 0, 0, 0], [0.0])
+        free_rotation([1, 2, 3], [0, 0, 0, 0], [0, 0, 1], [0.0])
     with pytest.raises(InvalidStateError):
-        free_rotation([1, 2, 3], [0, 0, 1], Q0, [np.inf])
+        free_rotation([1, 2, 3], Q0, [0, 0, 1], [np.inf])
+
+
+def test_earlier_argument_order_warns_and_agrees():
+    """free_rotation(moments, omega0, quat0, t), the order of earlier releases, still
+    works with a DeprecationWarning and gives the same motion."""
+    t = np.linspace(0.0, 50.0, 6)
+    q, w = free_rotation([1.0, 2.0, 3.0], Q0, [0.3, 0.2, 1.0], t)
+    with pytest.warns(DeprecationWarning, match="moments, quat0, omega0"):
+        q_old, w_old = free_rotation([1.0, 2.0, 3.0], [0.3, 0.2, 1.0], Q0, t)
+    np.testing.assert_array_equal(q_old, q)       # the same call after the swap
+    np.testing.assert_array_equal(w_old, w)

@@ -21,7 +21,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from attitude.errors import NearSeparatrixWarning
-from attitude.propagation.torquefree import diagnose, diagnose_principal, free_rotation
+from attitude.freebody import diagnose, diagnose_principal
+from attitude.propagation.torquefree import free_rotation
 from attitude.regimes import PERIOD_KEYS, REGIMES
 
 from . import oracle as O
@@ -48,11 +49,11 @@ def _rhs(I):
 def _crossings_ours(I, w, P_guess, n):
     """Ascending zero crossings of omega_2 from free_rotation, refined with brentq."""
     t = np.linspace(0.0, (n + 1.2) * P_guess, int(400 * (n + 1.2)))
-    w2 = free_rotation(I, w, [0, 0, 0, 1], t)[1][:, 1]
+    w2 = free_rotation(I, [0, 0, 0, 1], w, t)[1][:, 1]
     idx = np.nonzero((w2[:-1] < 0) & (w2[1:] >= 0))[0]
 
     def f(x):
-        return free_rotation(I, w, [0, 0, 0, 1], [x])[1][0, 1]
+        return free_rotation(I, [0, 0, 0, 1], w, [x])[1][0, 1]
     return np.array([brentq(f, t[i], t[i + 1], xtol=1e-14, rtol=1e-15) for i in idx])
 
 
@@ -105,7 +106,7 @@ def test_precession_period_vs_measured(name):
     assert ref == (2 if d.regime == "SAM" else 0)
     n = 5
     t = np.linspace(0.0, n * P, 4000 * n + 1)
-    q = free_rotation(I, w, [0, 0, 0, 1], t)[0]
+    q = free_rotation(I, [0, 0, 0, 1], w, t)[0]
     sol = solve_ivp(_rhs(I), (0, t[-1]), np.concatenate([w, [0, 0, 0, 1]]), method="DOP853",
                     rtol=1e-13, atol=1e-15, t_eval=t)
     Lhat = np.asarray(I) * w / np.linalg.norm(np.asarray(I) * w)  # q0 = identity
@@ -143,7 +144,7 @@ def test_nutation_range_vs_series():
         d = diagnose_principal(I, w)
         ref = d.reference_axis - 1
         t = np.linspace(0.0, d.periods["polhode"], 200001)
-        q, ws = free_rotation(I, w, [0, 0, 0, 1], t)
+        q, ws = free_rotation(I, [0, 0, 0, 1], w, t)
         Lb = np.asarray(I) * ws
         th = np.arccos(np.clip(Lb[:, ref] / np.linalg.norm(Lb, axis=1), -1, 1))
         assert abs(th.min() - d.nutation_range[0]) < 1e-8, name
@@ -268,3 +269,22 @@ def test_diagnose_with_body_and_state():
         assert d.periods[k] == pytest.approx(dp.periods[k], rel=1e-13)
     assert np.allclose(d.angular_momentum_inertial, state.angular_momentum(body), rtol=1e-13)
     assert att.diagnose is diagnose or att.diagnose(body, state).regime == "SAM"
+
+
+def test_diagnosis_moved_to_freebody_old_paths_warn():
+    """The analytic diagnosis lives in attitude.freebody (the elliptic kernels in
+    attitude.elliptic); the earlier paths still work with a DeprecationWarning."""
+    import importlib
+
+    import attitude
+    import attitude.freebody as fb
+    import attitude.propagation.torquefree as tf
+
+    for name in ("diagnose", "diagnose_principal", "diagnose_many", "branch_of",
+                 "Diagnosis"):
+        with pytest.warns(DeprecationWarning, match=f"use attitude.freebody.{name}"):
+            assert getattr(tf, name) is getattr(fb, name)
+    assert attitude.diagnose is fb.diagnose
+    old = importlib.import_module("attitude.propagation.elliptic")
+    with pytest.warns(DeprecationWarning, match="use attitude.elliptic.cel"):
+        assert old.cel is importlib.import_module("attitude.elliptic").cel

@@ -17,11 +17,11 @@ from astropy import units as u
 from astropy.time import Time
 
 from .. import quaternion as quat
-from ..body import RigidBody
+from ..body import RigidBody, as_bodies
 from ..ephemeris import Ephemeris
 from ..errors import InvalidStateError
 from ..population import Ensemble, check_batch
-from ..state import AttitudeState
+from ..state import AttitudeState, stack_states
 from .batch import propagate_ensemble
 from .events import as_events, locate, name_of
 from .reference import integrate_reference_batch, integrate_reference_events
@@ -67,14 +67,21 @@ def elapsed_seconds(times, epoch: Time) -> np.ndarray:
     return t
 
 
-def _as_batch(body, state) -> tuple[list[RigidBody], list[AttitudeState], bool]:
-    if isinstance(body, RigidBody) and isinstance(state, AttitudeState):
-        return [body], [state], False
-    if isinstance(body, RigidBody) or isinstance(state, AttitudeState):
+def _as_batch(body, state):
+    """``(bodies (BodyBatch), epoch, frame, q0 (N, 4) body -> inertial, w0 (N, 3), batch)``
+    from one body and state or from sequences of them (the batch normalisers of body
+    and state)."""
+    single = isinstance(body, RigidBody) and isinstance(state, AttitudeState)
+    if not single and (isinstance(body, RigidBody) or isinstance(state, AttitudeState)):
         raise InvalidStateError("a batch needs a sequence of bodies and a sequence of states "
                                 "of the same length")
-    bodies, states = check_batch(body, state)
-    return bodies, states, True
+    states = [state] if single else list(state)
+    if not single and (not states or len(states) != len(body)):
+        raise InvalidStateError(f"batch: got {len(body)} bodies and {len(states)} "
+                                "states; give one state per body")
+    bodies, _ = as_bodies([body] if single else body, moments=False)
+    epoch, frame, q0, w0 = stack_states(states, len(bodies))
+    return bodies, epoch, frame, q0, w0, not single
 
 
 def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
@@ -169,21 +176,19 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
                                     "propagate(ensemble, times)")
         ensemble = body
     elif (client is not None or chunks is not None) and not isinstance(body, RigidBody):
-        ensemble = Ensemble.from_bodies(*_as_batch(body, state)[:2])
+        ensemble = Ensemble.from_bodies(*check_batch(body, state))
     if ensemble is not None:
         return _propagate_ensemble(ensemble, times, torques=torques, method=method,
                                    rtol=rtol, step=step, order=order, progress=progress,
                                    events=events, client=client, chunks=chunks)
-    bodies, states, batch = _as_batch(body, state)
-    t = elapsed_seconds(times, states[0].epoch)
+    bodies, epoch, frame, q0, w0, batch = _as_batch(body, state)
+    t = elapsed_seconds(times, epoch)
     torques = list(torques or [])
     method = _choose_method(method, torques, rtol, step, order)
     if step is not None:
         step = _step_seconds(step)
     events = as_events(events)
 
-    q0 = np.stack([s.attitude.as_quat() for s in states])             # body -> inertial
-    w0 = np.stack([s.omega_body for s in states])
     records = None
     if events:
         if np.any(t < 0):
@@ -203,7 +208,7 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         q, w, bodies = q[0], w[0], bodies[0]
     name = bodies.name if isinstance(bodies, RigidBody) else "batch"
     eph = Ephemeris.from_arrays(
-        t, q, w, body=bodies, epoch=states[0].epoch, frame=states[0].frame,
+        t, q, w, body=bodies, epoch=epoch, frame=frame,
         title=f"attitude ephemeris{': ' + name if name else ''}",
         source=f"attitude.propagate, method={method}{_DESCRIPTION[method]}")
     if records is not None:
@@ -421,8 +426,7 @@ def _step_seconds(step) -> float:
     return value
 
 
-def _exact(bodies: list[RigidBody], q0: np.ndarray, w0: np.ndarray, t: np.ndarray):
+def _exact(bodies, q0: np.ndarray, w0: np.ndarray, t: np.ndarray):
     """Torque-free closed form, in principal frames, mapped back to body frames."""
-    q_bp = np.stack([b.body_to_principal.as_quat() for b in bodies])  # body -> principal
-    moments = np.stack([b.principal_moments for b in bodies])
-    return exact_arrays(moments, q_bp, q0, w0, t)
+    batch, _ = as_bodies(bodies, moments=False)
+    return exact_arrays(batch.principal_moments, batch.body_to_principal, q0, w0, t)

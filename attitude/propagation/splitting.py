@@ -71,8 +71,12 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import special as sp
 
-from ..body import RigidBody
+from .. import freebody as fb
+from .. import quaternion as quat
+from ..body import RigidBody, as_bodies, to_body_frame, to_principal_frame
+from ..deprecation import moved_attribute
 from ..errors import InvalidStateError
+from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
 from ..orbit import KeplerOrbit
 from ..torques import EddyCurrentDamping, EnergyDissipation, GravityGradient
 
@@ -83,17 +87,17 @@ __all__ = [
     "SCHEMES",
     "DEFAULT_SCHEME",
     "STEPS_PER_PERIOD",
-    "BodyBatch",
     "step_count",
 ]
 
-_EPS = float(np.finfo(float).eps)
-#: Below this relative transverse angular momentum a spin is treated as a pure
-#: principal-axis rotation (uniform rotation: exact, and free of 0/0 in the elliptic
-#: formulas).
-_PURE_SPIN_TOL = 1e-100
-#: Two moments closer than this (relative to C) make a body spherical for the kernel.
-_SPHERICAL_RTOL = 4.0 * _EPS
+# The free flow's tolerances are those of attitude.freebody: EQUAL_MOMENTS_RTOL (a
+# spherical body rotates uniformly) and PURE_SPIN_TOL_UNSCALED (a principal-axis spin
+# rotates uniformly; this kernel works on unscaled rates, see its comment there).
+
+
+def __getattr__(name):
+    # names that moved to another module: a DeprecationWarning naming the new home
+    return moved_attribute(__name__, name)
 
 
 # ===========================================================================
@@ -110,13 +114,13 @@ class _FreeConstants:
         m = moments / np.ldexp(1.0, e)[:, None]            # exact power-of-two scaling
         A, B, C = m[:, 0].copy(), m[:, 1].copy(), m[:, 2].copy()
         self.A, self.B, self.C = A, B, C
-        self.spherical = (C - A) <= _SPHERICAL_RTOL * C
+        self.spherical = (C - A) <= EQUAL_MOMENTS_RTOL * C
         # on the separatrix (L^2 = 2EB exactly) take the kernel frame with the larger
         # gap I3 - I2 (a prolate body spinning in its B-C plane goes to LAM)
         self.lam_on_tie = (C - B) < (B - A)
         with np.errstate(divide="ignore", invalid="ignore"):
-            self.nu_sam = C * (B - A) / (A * (C - B))
-            self.nu_lam = A * (C - B) / (C * (B - A))
+            self.nu_sam = fb.characteristic(A, B, C)        # kernel moments (A, B, C)
+            self.nu_lam = fb.characteristic(C, B, A)        # kernel moments (C, B, A)
 
     def row(self, i: int) -> tuple:
         """Plain-float constants of body ``i`` (for the one-body kernel)."""
@@ -134,28 +138,21 @@ def _free_flow_vec(c: _FreeConstants, q: np.ndarray, w: np.ndarray, h: float):
     o1, o2, o3 = w[:, 0], w[:, 1], w[:, 2]
     with np.errstate(all="ignore"):
         # kernel frame: SAM (A, B, C), or LAM (C, B, A) along (e3, -e2, e1)      (S1)
-        delta = C * (C - B) * (o3 * o3) - A * (B - A) * (o1 * o1)      # L^2 - 2EB
+        delta = fb.separatrix_gap(A, B, C, o1, o3)                     # L^2 - 2EB
         lam = (delta < 0) | ((delta == 0) & c.lam_on_tie)
-        I1 = np.where(lam, C, A)
-        I3 = np.where(lam, A, C)
-        I2 = B
-        w1 = np.where(lam, o3, o1)
-        w2 = np.where(lam, -o2, o2)
-        w3 = np.where(lam, o1, o3)
+        I1, I2, I3 = fb.kernel_moments(A, B, C, lam)
+        w1, w2, w3 = fb.kernel_vector(o1, o2, o3, lam)
         nu = np.where(lam, c.nu_lam, c.nu_sam)
-        d21, d31, d32 = I2 - I1, I3 - I1, I3 - I2
+        d21, d32, d31, Q1, Q3, Dk, Lsq = fb.invariants(I1, I2, I3, w1, w2, w3)
         L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
-        L = np.sqrt(L1 * L1 + L2 * L2 + L3 * L3)
-        w1s, w2s, w3s = w1 * w1, w2 * w2, w3 * w3
-        Q1 = I1 * d31 * w1s + I2 * d32 * w2s                           # 2E I3 - L^2
-        Q3 = I2 * d21 * w2s + I3 * d31 * w3s                           # L^2 - 2E I1
-        Dk = I3 * d32 * w3s - I1 * d21 * w1s                           # L^2 - 2E I2
-        den = d32 * Q3
-        m = np.minimum(np.maximum(d21 * Q1 / den, 0.0), 1.0)
-        m1 = np.minimum(np.maximum(d31 * Dk / den, 0.0), 1.0)
+        L = np.sqrt(Lsq)
+        w2s = w2 * w2
+        m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
+        m = np.minimum(np.maximum(m, 0.0), 1.0)
+        m1 = np.minimum(np.maximum(m1, 0.0), 1.0)
         # u = u0 + lambda t with dn(u) = w3 / a3 > 0: lambda has the sign of w3 (I3 - I2)
         s = np.where(w3 < 0, -1.0, 1.0)
-        lamb = np.where(lam, -s, s) * np.sqrt(den / (I1 * I2 * I3))
+        lamb = np.where(lam, -s, s) * np.sqrt(lam2)
         v = lamb * h
         sn, cn, dn, _ = sp.ellipj(v, m)
         snl = sn / lamb
@@ -196,23 +193,18 @@ def _free_flow_vec(c: _FreeConstants, q: np.ndarray, w: np.ndarray, h: float):
         c1 = L * d31 / (I1 * I3)
         dphi = h * (L / I3 + c1) - c1 * dJ / lamb
         # attitude: q(t+h) = q(t) E0^-1 E1, E = Rz(phi) Rx(theta) Rz(psi)       (S4)
-        ct0, st0 = _half_theta(L1, L2, L3)
+        ct0, st0 = fb.half_theta(L1, L2, L3)
         M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
-        ct1, st1 = _half_theta(M1, M2, M3)
-        ex, ey, ez, ew = _lfq(ct0, st0, 0.0, np.arctan2(L1, L2))
-        fx, fy, fz, fw = _lfq(ct1, st1, dphi, np.arctan2(M1, M2))
-        gx = ew * fx - ex * fw - ey * fz + ez * fy
-        gy = ew * fy + ex * fz - ey * fw - ez * fx
-        gz = ew * fz - ex * fy + ey * fx - ez * fw
-        gw = ew * fw + ex * fx + ey * fy + ez * fz
-        gx, gy, gz = np.where(lam, gz, gx), np.where(lam, -gy, gy), np.where(lam, gx, gz)
-        p1_ = np.where(lam, n3, n1)
-        p2_ = np.where(lam, -n2, n2)
-        p3_ = np.where(lam, n1, n3)
+        ct1, st1 = fb.half_theta(M1, M2, M3)
+        e = fb.euler313_quaternion(ct0, st0, 0.0, np.arctan2(L1, L2))
+        f = fb.euler313_quaternion(ct1, st1, dphi, np.arctan2(M1, M2))
+        gx, gy, gz, gw = quat.multiply_parts(quat.conjugate_parts(e), f)
+        gx, gy, gz = fb.kernel_vector(gx, gy, gz, lam)      # the step in principal axes
+        p1_, p2_, p3_ = fb.kernel_vector(n1, n2, n3, lam)
         # uniform rotation: spherical body, principal-axis spin, rest, lambda = 0 (S5)
         mid = np.maximum(np.minimum(np.abs(L1), np.abs(L2)),
                          np.minimum(np.maximum(np.abs(L1), np.abs(L2)), np.abs(L3)))
-        uniform = (c.spherical | (mid <= _PURE_SPIN_TOL * L) | ~(den > 0)
+        uniform = (c.spherical | (mid <= PURE_SPIN_TOL_UNSCALED * L) | ~(lam2 > 0)
                    | ~np.isfinite(gx + gy + gz + gw + p1_ + p2_ + p3_))
         if uniform.any():
             wn = np.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
@@ -225,33 +217,11 @@ def _free_flow_vec(c: _FreeConstants, q: np.ndarray, w: np.ndarray, h: float):
             p1_ = np.where(uniform, o1, p1_)
             p2_ = np.where(uniform, o2, p2_)
             p3_ = np.where(uniform, o3, p3_)
-    x, y, z, sw = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    out = np.empty_like(q)
-    out[:, 0] = sw * gx + x * gw + y * gz - z * gy
-    out[:, 1] = sw * gy - x * gz + y * gw + z * gx
-    out[:, 2] = sw * gz + x * gy - y * gx + z * gw
-    out[:, 3] = sw * gw - x * gx - y * gy - z * gz
+    out = quat.multiply(q, np.stack([gx, gy, gz, gw], axis=-1))
     out /= np.sqrt(np.sum(out * out, axis=1, keepdims=True))
     wout = np.empty_like(w)
     wout[:, 0], wout[:, 1], wout[:, 2] = p1_, p2_, p3_
     return out, wout
-
-
-def _lfq(ct, st, phi, psi):
-    """Quaternion (x, y, z, w) of ``Rz(phi) Rx(theta) Rz(psi)`` from cos/sin(theta/2)."""
-    hp = 0.5 * (phi + psi)
-    hm = 0.5 * (phi - psi)
-    return st * np.cos(hm), st * np.sin(hm), ct * np.sin(hp), ct * np.cos(hp)
-
-
-def _half_theta(L1, L2, L3):
-    """cos(theta/2), sin(theta/2) of the angle between axis 3 and L, no cancellation."""
-    rho = np.hypot(L1, L2)
-    Lt = np.hypot(rho, L3)
-    hh = np.sqrt((Lt + np.abs(L3)) / (2.0 * Lt))
-    o = rho / (2.0 * Lt * hh)
-    pos = L3 >= 0
-    return np.where(pos, hh, o), np.where(pos, o, hh)
 
 
 def _uniform1(q, o1, o2, o3, h):
@@ -262,31 +232,10 @@ def _uniform1(q, o1, o2, o3, h):
 
 
 def _qmul1(q, g):
-    x, y, z, s = q
-    gx, gy, gz, gw = g
-    nx = s * gx + x * gw + y * gz - z * gy
-    ny = s * gy - x * gz + y * gw + z * gx
-    nz = s * gz + x * gy - y * gx + z * gw
-    nw = s * gw - x * gx - y * gy - z * gz
+    """Normalised product ``q g`` of component quaternions (plain floats)."""
+    nx, ny, nz, nw = quat.multiply_parts(q, g)
     r = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
     return (nx * r, ny * r, nz * r, nw * r)
-
-
-def _rot1(q, v):
-    """Rotate the 3-vector ``v`` by the unit quaternion ``q`` (plain floats)."""
-    ux, uy, uz, w = q
-    vx, vy, vz = v
-    tx, ty, tz = 2.0 * (uy * vz - uz * vy), 2.0 * (uz * vx - ux * vz), 2.0 * (ux * vy - uy * vx)
-    return (vx + w * tx + uy * tz - uz * ty, vy + w * ty + uz * tx - ux * tz,
-            vz + w * tz + ux * ty - uy * tx)
-
-
-def _half_theta1(L1, L2, L3):
-    rho = math.hypot(L1, L2)
-    Lt = math.hypot(rho, L3)
-    hh = math.sqrt((Lt + abs(L3)) / (2.0 * Lt))
-    o = rho / (2.0 * Lt * hh)
-    return (hh, o) if L3 >= 0 else (o, hh)
 
 
 def _clip1(x, lo, hi):
@@ -300,29 +249,24 @@ def _free_flow1(k: tuple, q: tuple, w: tuple, h: float):
     o1, o2, o3 = w
     if spherical:
         return _uniform1(q, o1, o2, o3, h)
-    delta = C * (C - B) * (o3 * o3) - A * (B - A) * (o1 * o1)
+    delta = fb.separatrix_gap(A, B, C, o1, o3)
     lam = delta < 0 or (delta == 0 and lam_on_tie)
-    if lam:
-        I1, I3, w1, w2, w3, nu = C, A, o3, -o2, o1, nu_lam
-    else:
-        I1, I3, w1, w2, w3, nu = A, C, o1, o2, o3, nu_sam
-    I2 = B
-    d21, d31, d32 = I2 - I1, I3 - I1, I3 - I2
+    I1, I2, I3 = fb.kernel_moments(A, B, C, lam)
+    w1, w2, w3 = fb.kernel_vector(o1, o2, o3, lam)
+    nu = nu_lam if lam else nu_sam
+    d21, d32, d31, Q1, Q3, Dk, Lsq = fb.invariants(I1, I2, I3, w1, w2, w3)
     L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
-    L = math.sqrt(L1 * L1 + L2 * L2 + L3 * L3)
+    L = math.sqrt(Lsq)
     a_, b_, c_ = abs(L1), abs(L2), abs(L3)
     mid = max(min(a_, b_), min(max(a_, b_), c_))
-    w1s, w2s, w3s = w1 * w1, w2 * w2, w3 * w3
-    Q3 = I2 * d21 * w2s + I3 * d31 * w3s
-    den = d32 * Q3
-    if mid <= _PURE_SPIN_TOL * L or not den > 0:
+    w2s = w2 * w2
+    if mid <= PURE_SPIN_TOL_UNSCALED * L or not d32 * Q3 > 0:
         return _uniform1(q, o1, o2, o3, h)
-    Q1 = I1 * d31 * w1s + I2 * d32 * w2s
-    Dk = I3 * d32 * w3s - I1 * d21 * w1s
-    m = _clip1(d21 * Q1 / den, 0.0, 1.0)
-    m1 = _clip1(d31 * Dk / den, 0.0, 1.0)
+    m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
+    m = _clip1(m, 0.0, 1.0)
+    m1 = _clip1(m1, 0.0, 1.0)
     s = -1.0 if w3 < 0 else 1.0
-    lamb = (-s if lam else s) * math.sqrt(den / (I1 * I2 * I3))
+    lamb = (-s if lam else s) * math.sqrt(lam2)
     v = lamb * h
     sn, cn, dn, _ = sp.ellipj(v, m)
     sn, cn, dn = float(sn), float(cn), float(dn)
@@ -358,27 +302,17 @@ def _free_flow1(k: tuple, q: tuple, w: tuple, h: float):
         dJ += 2.0 * dwin * (nu / 3.0) * float(sp.elliprj(0.0, m1, 1.0, 1.0 + nu))
     c1 = L * d31 / (I1 * I3)
     dphi = h * (L / I3 + c1) - c1 * dJ / lamb
-    ct0, st0 = _half_theta1(L1, L2, L3)
+    ct0, st0 = fb.half_theta(L1, L2, L3)
     M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
-    ct1, st1 = _half_theta1(M1, M2, M3)
-    psi0 = math.atan2(L1, L2)
-    psi1 = math.atan2(M1, M2)
-    ex, ey = st0 * math.cos(-0.5 * psi0), st0 * math.sin(-0.5 * psi0)
-    ez, ew = ct0 * math.sin(0.5 * psi0), ct0 * math.cos(0.5 * psi0)
-    hp, hm = 0.5 * (dphi + psi1), 0.5 * (dphi - psi1)
-    fx, fy = st1 * math.cos(hm), st1 * math.sin(hm)
-    fz, fw = ct1 * math.sin(hp), ct1 * math.cos(hp)
-    gx = ew * fx - ex * fw - ey * fz + ez * fy
-    gy = ew * fy + ex * fz - ey * fw - ez * fx
-    gz = ew * fz - ex * fy + ey * fx - ez * fw
-    gw = ew * fw + ex * fx + ey * fy + ez * fz
-    if lam:
-        g, wn = (gz, -gy, gx, gw), (n3, -n2, n1)
-    else:
-        g, wn = (gx, gy, gz, gw), (n1, n2, n3)
+    ct1, st1 = fb.half_theta(M1, M2, M3)
+    e = fb.euler313_quaternion(ct0, st0, 0.0, math.atan2(L1, L2))
+    f = fb.euler313_quaternion(ct1, st1, dphi, math.atan2(M1, M2))
+    gx, gy, gz, gw = quat.multiply_parts(quat.conjugate_parts(e), f)
+    gx, gy, gz = fb.kernel_vector(gx, gy, gz, lam)          # the step in principal axes
+    wn = fb.kernel_vector(n1, n2, n3, lam)
     if not math.isfinite(gx + gy + gz + gw + wn[0] + wn[1] + wn[2]):
         return _uniform1(q, o1, o2, o3, h)
-    return _qmul1(q, g), wn
+    return _qmul1(q, (gx, gy, gz, gw)), wn
 
 
 def free_flow(moments, quat, omega, h):
@@ -558,45 +492,6 @@ def _resolve_scheme(order, scheme, attitude_only: bool = False) -> tuple[str, in
 # ===========================================================================
 # bodies, torques and the kick
 # ===========================================================================
-class BodyBatch(tuple):
-    """The bodies of a batch as torque models receive them: a tuple of
-    :class:`~attitude.body.RigidBody` (``body[i]``, ``len(body)``) that also carries the
-    stacked arrays ``inertia`` (N, 3, 3), ``principal_moments`` (N, 3) and ``mass``
-    (N,) (or ``None`` if a body has no mass), so that vectorised models read them once.
-    """
-
-    def __new__(cls, bodies):
-        self = super().__new__(cls, bodies)
-        self.inertia = np.stack([b.inertia for b in self])
-        self.principal_moments = np.stack([b.principal_moments for b in self])
-        masses = [b.mass for b in self]
-        self.mass = None if any(m is None for m in masses) else np.asarray(masses, float)
-        return self
-
-
-def _as_bodies(bodies) -> tuple[list[RigidBody], bool]:
-    """Bodies (or principal moments) -> list of RigidBody, and whether one was given."""
-    if isinstance(bodies, RigidBody):
-        return [bodies], True
-    if isinstance(bodies, np.ndarray) or (isinstance(bodies, Sequence) and len(bodies) > 0
-                                          and not isinstance(bodies[0], RigidBody)):
-        m = np.asarray(bodies, dtype=float)
-        if m.shape == (3,):
-            return [RigidBody.from_principal_moments(m)], True
-        if m.ndim == 2 and m.shape[1] == 3 and m.shape[0] > 0:
-            return [RigidBody.from_principal_moments(row) for row in m], False
-        raise InvalidStateError(f"bodies: expected a RigidBody, a sequence of them or "
-                                f"principal moments (3,) / (N, 3), got shape {m.shape}")
-    bodies = list(bodies)
-    if not bodies:
-        raise InvalidStateError("bodies: empty sequence")
-    for i, b in enumerate(bodies):
-        if not isinstance(b, RigidBody):
-            raise InvalidStateError(f"bodies[{i}]: expected a RigidBody, got "
-                                    f"{type(b).__name__}")
-    return bodies, False
-
-
 def _terms(torques) -> list:
     """Flatten torque models (sums included) into their terms."""
     if torques is None:
@@ -625,13 +520,14 @@ class _System:
     def __init__(self, bodies: list[RigidBody], torques):
         self.bodies = bodies
         self.n = len(bodies)
-        self.body_arg = bodies[0] if self.n == 1 else BodyBatch(bodies)
+        batch, _ = as_bodies(bodies)
+        self.body_arg = bodies[0] if self.n == 1 else batch
         terms = _terms(torques)
         self.kick_terms = [m for m in terms if _is_conservative(m)]
         self.drag_terms = [m for m in terms if not _is_conservative(m)]
-        self.moments = np.stack([b.principal_moments for b in bodies])
+        self.moments = batch.principal_moments
         self.inv_moments = 1.0 / self.moments
-        self.q_bp = np.stack([b.body_to_principal.as_quat() for b in bodies])
+        self.q_bp = batch.body_to_principal
         self.identity = bool(np.all(self.q_bp == np.array([0.0, 0.0, 0.0, 1.0])))
         self.free = _FreeConstants(self.moments)
 
@@ -640,13 +536,12 @@ class _System:
         """Body-frame quaternions (N, 4) and rates (N, 3) -> principal frame."""
         if self.identity:
             return q_b.copy(), w_b.copy()
-        q_pb = _conj(self.q_bp)
-        return _qmul(q_b, q_pb), _rot(self.q_bp, w_b)
+        return to_principal_frame(q_b, w_b, self.q_bp)
 
     def to_body(self, q_p: np.ndarray, w_p: np.ndarray):
         if self.identity:
             return q_p.copy(), w_p.copy()
-        return _qmul(q_p, self.q_bp), _rot(_conj(self.q_bp), w_p)
+        return to_body_frame(q_p, w_p, self.q_bp)
 
     # --- torques -----------------------------------------------------------------------
     def _torque(self, models, t, q_p, w_p):
@@ -669,7 +564,7 @@ class _System:
                 raise InvalidStateError(f"a torque model returned shape {total.shape}; "
                                         f"expected ({self.n}, 3) body-frame N m") from None
         if not self.identity:
-            total = _rot(self.q_bp, total)
+            total = quat.rotate(self.q_bp, total)
         return total * self.inv_moments
 
     def accel_kick(self, t, q_p, w_p):
@@ -677,31 +572,6 @@ class _System:
 
     def accel_drag(self, t, q_p, w_p):
         return self._torque(self.drag_terms, t, q_p, w_p)
-
-
-def _conj(q):
-    out = q.copy()
-    out[..., :3] *= -1.0
-    return out
-
-
-def _qmul(p, q):
-    px, py, pz, pw = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-    qx, qy, qz, qw = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack([pw * qx + px * qw + py * qz - pz * qy,
-                     pw * qy - px * qz + py * qw + pz * qx,
-                     pw * qz + px * qy - py * qx + pz * qw,
-                     pw * qw - px * qx - py * qy - pz * qz], axis=-1)
-
-
-def _rot(q, v):
-    u, w = q[..., :3], q[..., 3:]
-    ux, uy, uz = u[..., 0], u[..., 1], u[..., 2]
-    vx, vy, vz = v[..., 0], v[..., 1], v[..., 2]
-    tx, ty, tz = 2 * (uy * vz - uz * vy), 2 * (uz * vx - ux * vz), 2 * (ux * vy - uy * vx)
-    w = w[..., 0]
-    return np.stack([vx + w * tx + uy * tz - uz * ty, vy + w * ty + uz * tx - ux * tz,
-                     vz + w * tz + ux * ty - uy * tx], axis=-1)
 
 
 # ===========================================================================
@@ -795,7 +665,7 @@ def choose_step(bodies, quat0, omega0, torques=(), *, order: int = 4,
     (the torque-model tests hold conserved quantities to 1e-10 with it), ~1e-6 at
     order 2.  Returns ``inf`` without torques (the free flow is exact in one step).
     """
-    body_list, _ = _as_bodies(bodies)
+    body_list, _ = as_bodies(bodies)
     system = _System(body_list, torques)
     q0 = np.atleast_2d(np.asarray(quat0, dtype=float))
     w0 = np.atleast_2d(np.asarray(omega0, dtype=float))
@@ -907,9 +777,8 @@ class _One:
         if self.identity:
             q_b, w_b = np.array(q), np.array(w)
         else:
-            bx, by, bz, bw = self.q_bp_t
             q_b = np.array(_qmul1(q, self.q_bp_t))
-            w_b = np.array(_rot1((-bx, -by, -bz, bw), w))
+            w_b = np.array(quat.rotate_parts(self.q_bp_t, w, inverse=True))
         total = None
         for model in models:
             out = np.asarray(model(t, q_b, w_b, self.body), dtype=float)
@@ -919,7 +788,7 @@ class _One:
                                     "expected (3,) body-frame N m")
         m = total.ravel().tolist()
         if not self.identity:
-            m = _rot1(self.q_bp_t, m)
+            m = quat.rotate_parts(self.q_bp_t, m)
         i1, i2, i3 = self.inv
         return (m[0] * i1, m[1] * i2, m[2] * i3)
 
@@ -1033,7 +902,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         (:mod:`attitude.torques`).  Models with ``velocity_dependent = False`` are
         exact kicks; the others are integrated inside the kick.  In a batch a model is
         called once per kick with arrays ``(N, 4)``, ``(N, 3)`` and a
-        :class:`BodyBatch`; for one body with ``(4,)``, ``(3,)`` and the
+        :class:`attitude.body.BodyBatch`; for one body with ``(4,)``, ``(3,)`` and the
         :class:`~attitude.body.RigidBody` (like the reference integrator).
     step : float, optional
         Longest step, s.  Default: :func:`choose_step`.
@@ -1068,7 +937,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     >>> q.shape, w.shape
     ((7, 4), (7, 3))
     """
-    body_list, single = _as_bodies(bodies)
+    body_list, single = as_bodies(bodies)
     system = _System(body_list, torques)
     n = system.n
     name, sorder, ops_step = _resolve_scheme(order, scheme, not system.drag_terms)
@@ -1155,8 +1024,10 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                 ops.store(out_q, out_w, j, q, w)
     finally:
         bar.close()
-    qb = out_q if system.identity else _qmul(out_q, system.q_bp[:, None, :])
-    wb = out_w if system.identity else _rot(_conj(system.q_bp)[:, None, :], out_w)
+    if system.identity:
+        qb, wb = out_q, out_w
+    else:
+        qb, wb = to_body_frame(out_q, out_w, system.q_bp[:, None, :])
     if single:
         return qb[0], wb[0]
     return qb, wb

@@ -26,77 +26,51 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import special as sp
 
+from .. import elliptic as el
+from .. import freebody as fb
 from .. import quaternion as quat
-from ..body import SYMMETRY_RTOL
-from ..errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
-from ..regimes import PERIOD_KEYS, REGIMES
-from . import elliptic as el
+from ..body import to_principal_frame
+from ..deprecation import moved_attribute
+from ..freebody import (
+    EQUAL_MOMENTS_RTOL,
+    NEAR_SEPARATRIX_WARN,
+    PURE_SPIN_TOL,
+    SEPARATRIX_M1_TOL,
+)
 
 __all__ = [
     "free_rotation",
     "exact_arrays",
-    "Diagnosis",
-    "diagnose",
-    "diagnose_principal",
-    "diagnose_many",
-    "branch_of",
     "RTOL_AXISYMMETRIC",
     "PURE_SPIN_TOL",
     "SEPARATRIX_M1_TOL",
     "NEAR_SEPARATRIX_WARN",
 ]
 
-_EPS = float(np.finfo(float).eps)
+#: The branch tolerances (:data:`PURE_SPIN_TOL`, :data:`SEPARATRIX_M1_TOL`,
+#: :data:`NEAR_SEPARATRIX_WARN`) live in :mod:`attitude.freebody` with their reasons.
+#: ``RTOL_AXISYMMETRIC`` is this module's earlier name of
+#: :data:`attitude.freebody.EQUAL_MOMENTS_RTOL` (the same value), kept for its users.
+RTOL_AXISYMMETRIC = EQUAL_MOMENTS_RTOL
 
-#: Propagation branch tolerance: two moments are *exactly* equal for the solver when
-#: they differ by at most ``RTOL_AXISYMMETRIC * C`` (4 ulp).  Above it the triaxial
-#: formulas are used; they remain exact and continuous down to this limit (tested).
-RTOL_AXISYMMETRIC = 4.0 * _EPS
-#: Principal-axis spin branch: used when the two smaller body components of L are
-#: at most ``PURE_SPIN_TOL * |L|``.  Below ~1e-150 the elliptic solution would square
-#: amplitudes into the subnormal range; the pure spin differs from the exact motion
-#: by O(PURE_SPIN_TOL) relative.
-PURE_SPIN_TOL = 1e-150
-#: Separatrix branch: used when the complementary parameter ``m1 = 1 - k^2`` is at
-#: most this (including ``L^2 = 2EB`` exactly).  Between it and 0 the heteroclinic
-#: closed form equals the elliptic solution to ``O(m1 exp(2 lambda |t|))``, i.e. for
-#: ``lambda |t| < 200``.
-SEPARATRIX_M1_TOL = 1e-200
-#: ``diagnose`` warns (:class:`NearSeparatrixWarning`) when ``0 < |m1| <`` this:
-#: the periods then change by more than 1e-6 relative under a 1-ulp change of input.
-NEAR_SEPARATRIX_WARN = 1e-10
+
+def __getattr__(name):
+    # the analytic diagnosis moved to attitude.freebody: a DeprecationWarning naming it
+    return moved_attribute(__name__, name)
 
 _BLOCK = 1 << 15  # elements per evaluation block (fits L2 cache)
 _TWO_PI = 2.0 * math.pi
 _FOUR_PI_LD = 4 * el.PI_LD
-_SQRT_HALF = math.sqrt(0.5)
 _LD = el.LD
 
 
 # ===========================================================================
 # small helpers
 # ===========================================================================
-def _qmul(a, b):
-    """Hamilton product of quaternions given as 4-tuples ``(x, y, z, w)``."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    )
-
-
-def _qconj(a):
-    return (-a[0], -a[1], -a[2], a[3])
-
-
 def _lin_turns(tsp, t, c, add=None):
     """``t * c (+ add)`` as an unevaluated sum ``p + e`` (double-double).
 
@@ -140,25 +114,6 @@ def _turn_const(x_ld):
     return (h1, h2, lo, hi)
 
 
-def _l_frame_quat(ct, st, phi, psi):
-    """Quaternion of ``Rz(phi) Rx(theta) Rz(psi)`` from ``cos/sin(theta/2)`` (TF 14)."""
-    hp = 0.5 * (phi + psi)
-    hm = 0.5 * (phi - psi)
-    return (st * np.cos(hm), st * np.sin(hm), ct * np.sin(hp), ct * np.cos(hp))
-
-
-def _half_theta(L1, L2, L3):
-    """``cos(theta/2), sin(theta/2)`` of the angle between body axis 3 and L, from
-    the body components of L without cancellation (TF 13)."""
-    rho = np.hypot(L1, L2)
-    Lt = np.hypot(rho, L3)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        h = np.sqrt((Lt + np.abs(L3)) / (2.0 * Lt))
-        o = rho / (2.0 * Lt * h)
-    pos = L3 >= 0
-    return np.where(pos, h, o), np.where(pos, o, h)
-
-
 def _blocks(nrows, ncols):
     """Row/column slices of ~_BLOCK elements covering an (nrows, ncols) grid."""
     if ncols >= _BLOCK or nrows == 1:
@@ -196,169 +151,41 @@ def _col(x):
 # ===========================================================================
 # discriminant and per-body invariants
 # ===========================================================================
-def _discriminant_dd(I, w):
-    """``2EB - L^2 = C(C-B) w3^2 - A(B-A) w1^2`` with sign flipped, i.e.
-    ``Delta = L^2 - 2EB``, in double-double (TF 5).
-
-    Computed from the rate components so the only cancellation is the final
-    subtraction, done on operands exact to ~eps**2: the result carries full
-    relative precision down to ``|Delta| ~ 1e-16 |terms|`` and beyond.
-    """
-    A, B, C = I[:, 0], I[:, 1], I[:, 2]
-    w1, w3 = w[:, 0], w[:, 2]
-    d32 = el.two_sum(C, -B)
-    d21 = el.two_sum(B, -A)
-    t3 = el.dd_mul_dd(el.dd_mul_d(el.two_prod(w3, w3), C), d32)
-    t1 = el.dd_mul_dd(el.dd_mul_d(el.two_prod(w1, w1), A), d21)
-    return el.dd_add(t3, (-t1[0], -t1[1]))
-
-
-def _invariants_ld(I, w):
-    """Kernel-frame invariants in longdouble for moments ``I = (I1, I2, I3)`` that
-    are monotonic (either order) and rates ``w`` in that frame (TF 3-8)."""
-    I = I.astype(_LD)
-    w = w.astype(_LD)
-    I1, I2, I3 = I[:, 0], I[:, 1], I[:, 2]
-    w1, w2, w3 = w[:, 0], w[:, 1], w[:, 2]
-    d21 = np.abs(I2 - I1)
-    d32 = np.abs(I3 - I2)
-    d31 = np.abs(I3 - I1)
-    Q1 = I1 * d31 * w1 * w1 + I2 * d32 * w2 * w2  # |2E I3 - L^2|        (TF 3)
-    Q3 = I2 * d21 * w2 * w2 + I3 * d31 * w3 * w3  # |L^2 - 2E I1|        (TF 3)
-    L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
-    return dict(I1=I1, I2=I2, I3=I3, w1=w1, w2=w2, w3=w3, d21=d21, d32=d32, d31=d31,
-                Q1=Q1, Q3=Q3, L2=L2, L=np.sqrt(L2))
-
-
-# ===========================================================================
-# branch selection
-# ===========================================================================
-_BR_PREC, _BR_SEP, _BR_SAM, _BR_LAM = 0, 1, 2, 3
-
-
-def _branches(I, w):
-    """Propagation branch of each body (scaled inputs) and the double-double
-    discriminant.  Tolerances: module constants (TF 30)."""
-    A, B, C = I[:, 0], I[:, 1], I[:, 2]
-    Lb = np.abs(I * w)
-    Ls = np.sort(Lb, axis=1)
-    Lnorm = np.sqrt(np.sum(Lb * Lb, axis=1))
-    tol = RTOL_AXISYMMETRIC * C
-    prec = ((C - A) <= tol) | ((B - A) <= tol) | ((C - B) <= tol)
-    prec |= Ls[:, 1] <= PURE_SPIN_TOL * Lnorm  # pure principal-axis spin, or omega = 0
-    br = np.full(I.shape[0], _BR_PREC, dtype=np.int8)
-    tri = ~prec
-    dhi, dlo = _discriminant_dd(I, w)
-    if tri.any():
-        sam = tri & (dhi > 0)
-        lam = tri & (dhi < 0)
-        br[sam] = _BR_SAM
-        br[lam] = _BR_LAM
-        br[tri & (dhi == 0)] = _BR_SEP
-        # complementary parameter m1 (TF 6) decides the separatrix branch
-        idx = np.nonzero(sam | lam)[0]
-        if idx.size:
-            m1 = _m1_of(I[idx], w[idx], dhi[idx], dlo[idx], br[idx] == _BR_LAM)
-            br[idx[m1 <= SEPARATRIX_M1_TOL]] = _BR_SEP
-    return br, dhi, dlo
-
-
-def _kernel_frame(I, w, lam):
-    """Map to the kernel frame: identity for SAM; for LAM the right-handed frame
-    ``(e3, -e2, e1)`` with moments ``(C, B, A)`` (TF 9)."""
-    Ik = np.where(lam[:, None], I[:, ::-1], I)
-    wk = np.where(lam[:, None], np.stack([w[:, 2], -w[:, 1], w[:, 0]], axis=1), w)
-    return Ik, wk
-
-
-def _m1_of(I, w, dhi, dlo, lam):
-    Ik, wk = _kernel_frame(I, w, lam)
-    inv = _invariants_ld(Ik, wk)
-    D = np.abs(dhi.astype(_LD) + dlo.astype(_LD))
-    return (inv["d31"] * D / (inv["d32"] * inv["Q3"])).astype(np.float64)
-
-
-# ===========================================================================
-# triaxial (SAM / LAM) branch
-# ===========================================================================
 def _triaxial_setup(I, w, dhi, dlo, lam):
-    """Per-body constants of the elliptic solution in the kernel frame (TF 3-12, 16-22).
+    """Evaluation constants of the elliptic solution (TF 16-23) from the per-body
+    constants of :func:`attitude.freebody.elliptic_constants`.
 
     ``lam`` is a scalar bool: the whole group is LAM (kernel frame relabelled) or SAM.
     """
     n = I.shape[0]
-    Ik, wk = _kernel_frame(I, w, np.full(n, lam))
-    v = _invariants_ld(Ik, wk)
-    I1, I2, I3 = v["I1"], v["I2"], v["I3"]
-    d21, d32, d31, Q1, Q3, L = v["d21"], v["d32"], v["d31"], v["Q1"], v["Q3"], v["L"]
-    Dl = np.abs(dhi.astype(_LD) + dlo.astype(_LD))  # |L^2 - 2EB|          (TF 5)
-    m = d21 * Q1 / (d32 * Q3)  # k^2                                         (TF 6)
-    m1 = d31 * Dl / (d32 * Q3)  # 1 - k^2, no cancellation                   (TF 6)
-    lamb = np.sqrt(d32 * Q3 / (I1 * I2 * I3))  # lambda                      (TF 4)
-    nu = I3 * d21 / (I1 * d32)  # -n, characteristic of Pi                   (TF 10)
-    onu = 1 + nu
-    N = (m + nu) / onu  # shifted characteristic                             (TF 11)
-    omN = m1 / onu  # 1 - N
-    g, omg, scale, mu = el.landen_chain(m, m1)
-    K = el.k_from_chain(scale, mu)
-    kp = np.sqrt(m1)
-    a1 = np.sqrt(Q1 / (I1 * d31))  # amplitudes                              (TF 3)
-    a2 = np.sqrt(Q1 / (I2 * d32))
-    a3 = np.sqrt(Q3 / (I3 * d31))
-    s = np.where(wk[:, 2] < 0, -1.0, 1.0)
-    c1 = L * d31 / (I1 * I3)
-    if not lam:  # SAM: phi' = L/I3 + c1/(1 + nu sn^2)                          (TF 15)
-        KG = el.cel(kp, onu, 1, 1)
-        w_lin = L / I3
-        kappa_j = 2 * c1 * KG / lamb
-        kappa_r = c1 / (lamb * onu)
-        beta = nu * omN / 3
-        sigma = 1.0
-    else:  # LAM: phi' = L/I1 + c1 nu sn^2/(1 + nu sn^2)                        (TF 15')
-        KG2 = el.cel(kp, onu, 0, nu)
-        w_lin = L / I1
-        kappa_j = -2 * c1 * KG2 / lamb
-        kappa_r = -c1 * nu / (lamb * onu)
-        beta = -omN / 3
-        sigma = -1.0
-    # initial phase u0 = F(am u0 | m) through Carlson's RF                    (TF 12)
-    cn0sq = (I1 * d31 * wk[:, 0] ** 2 / Q1).astype(np.float64)
-    dn0sq = (I3 * d31 * wk[:, 2] ** 2 / Q3).astype(np.float64)
-    sn0abs = np.sqrt((I2 * d32 * wk[:, 1] ** 2 / Q1).astype(np.float64))
-    f = sn0abs * sp.elliprf(cn0sq, dn0sq, 1.0)
+    x = fb.elliptic_constants(I, w, dhi, dlo, lam)
+    K, m1, s = x["K"], x["m1"], x["s"]
     Kd = K.astype(np.float64)
-    sgn_sn0 = np.where(s * wk[:, 1] < 0, -1.0, 1.0)
-    u0 = sgn_sn0 * np.where(wk[:, 0] >= 0, f, 2.0 * Kd - f)
-    v0 = u0 - Kd  # phase of the shifted variable v = u - K                  (TF 16)
     twoK = 2 * K
     c = dict(
-        vt=_turn_const(sigma * lamb / twoK),  # v / 2K advances at this rate
-        v0t=_col(v0 / (2.0 * Kd)),
+        vt=_turn_const(x["sigma"] * x["lamb"] / twoK),  # v / 2K advances at this rate
+        v0t=_col(x["v0"] / (2.0 * Kd)),
         twoK=_col(twoK), K=_col(K), Kh=_col(K / 2),
-        g=g.astype(np.float64)[:, :, None], omg=omg.astype(np.float64)[:, :, None],
-        inv_scale=_col(1 / scale), mu=_col(mu),
-        kp=_col(kp), N=_col(N), omN=_col(omN), beta=_col(beta),
-        a1=_col(a1), a2s=_col(s * a2), a3s=_col(s * a3),
-        alp=_col(I1 * a1), bet=_col(I2 * a2), s=_col(s),
-        I1=_col(I1), I2=_col(I2), I3=_col(I3),
-        ph=_turn_const(w_lin / _FOUR_PI_LD),
-        pj=_turn_const(kappa_j / _FOUR_PI_LD),
-        kr=_col(kappa_r), C0=np.zeros((n, 1)),
+        g=x["g"].astype(np.float64)[:, :, None], omg=x["omg"].astype(np.float64)[:, :, None],
+        inv_scale=_col(1 / x["scale"]), mu=_col(x["mu"]),
+        kp=_col(x["kp"]), N=_col(x["N"]), omN=_col(x["omN"]), beta=_col(x["beta"]),
+        a1=_col(x["a1"]), a2s=_col(s * x["a2"]), a3s=_col(s * x["a3"]),
+        alp=_col(x["I1"] * x["a1"]), bet=_col(x["I2"] * x["a2"]), s=_col(s),
+        I1=_col(x["I1"]), I2=_col(x["I2"]), I3=_col(x["I3"]),
+        ph=_turn_const(x["w_lin"] / _FOUR_PI_LD),
+        pj=_turn_const(x["kappa_j"] / _FOUR_PI_LD),
+        kr=_col(x["kappa_r"]), C0=np.zeros((n, 1)),
         QL=tuple(np.zeros((n, 1)) for _ in range(4)), lam=lam,
         tiny=bool(np.any(m1 < 1e-60)),
     )
     for k in ("vt", "ph", "pj"):
-        c[k] = tuple(_col(x) for x in c[k])
+        c[k] = tuple(_col(v) for v in c[k])
     # integration constant and L-frame orientation from t = 0            (TF 23)
     zero = np.zeros((n, 1))
     phi0, ct0, st0, psi0 = _triaxial_eval(c, zero, angles_only=True)
     c["C0"] = phi0
-    E0 = _l_frame_quat(ct0, st0, 0.0, psi0)
-    c["E0"] = E0
-    extra = dict(m=m, m1=m1, lamb=lamb, K=K, L=L, nu=nu, N=N, w_lin=w_lin, kappa_j=kappa_j,
-                 sigma=sigma, Q1=Q1, Q3=Q3, Dl=Dl, I1=I1, I2=I2, I3=I3, d21=d21, d32=d32,
-                 d31=d31, s=s)
-    return c, extra
+    c["E0"] = fb.euler313_quaternion(ct0, st0, 0.0, psi0)
+    return c, x
 
 
 #: below this largest argument, RJ(x, y, 1, p) is taken from its z -> infinity limit
@@ -428,20 +255,17 @@ def _triaxial_eval(c, t, angles_only=False):
     L1 = c["I1"] * w1
     L2 = c["I2"] * w2
     L3 = c["I3"] * w3
-    ct, st = _half_theta(L1, L2, L3)
+    ct, st = fb.half_theta(L1, L2, L3)
     chi = np.arctan2(c["bet"] * snK, c["alp"] * cnK)  # in [0, pi]
     jm4 = j - 4.0 * np.floor(0.25 * j)
     psi = 0.5 * math.pi - c["s"] * (math.pi * jm4 + chi)  # unwrapped mod 4 pi (TF 13)
     if angles_only:
         return phi, ct, st, psi
-    E = _l_frame_quat(ct, st, phi, psi)
-    if c["lam"]:  # E (x) q_M, q_M = (1/sqrt2, 0, 1/sqrt2, 0)                 (TF 9)
-        ex, ey, ez, ew = E
-        E = (_SQRT_HALF * (ew + ey), _SQRT_HALF * (ez - ex), _SQRT_HALF * (ew - ey),
-             -_SQRT_HALF * (ex + ez))
-        w1, w3 = w3, w1
-        w2 = -w2
-    q = _qmul(c["QL"], E)
+    E = fb.euler313_quaternion(ct, st, phi, psi)
+    if c["lam"]:  # E (x) q_M and the rates back in principal axes              (TF 9)
+        E = fb.kernel_attitude(E)
+        w1, w2, w3 = fb.kernel_vector(w1, w2, w3, True)
+    q = quat.multiply_parts(c["QL"], E)
     return q, (w1, w2, w3)
 
 
@@ -451,7 +275,7 @@ def _triaxial_eval(c, t, angles_only=False):
 def _separatrix_setup(I, w):
     """Per-body constants of the separatrix solution, principal labels (TF 24-26)."""
     n = I.shape[0]
-    v = _invariants_ld(I, w)
+    v = fb.kernel_invariants(I, w)
     I1, I2, I3 = v["I1"], v["I2"], v["I3"]
     d21, d32, d31, Q1, Q3, L = v["d21"], v["d32"], v["d31"], v["Q1"], v["Q3"], v["L"]
     lamb = np.sqrt(0.5 * (d32 * Q3 + d21 * Q1) / (I1 * I2 * I3))  # (TF 24)
@@ -464,7 +288,7 @@ def _separatrix_setup(I, w):
     s2 = s1 * s3
     rho0 = np.minimum(np.maximum(np.abs(w1) / a1, np.abs(w3) / a3), 1.0)  # sech(tau0)
     tau0 = np.arcsinh(s2 * w2 / (a2 * rho0))
-    nu = I3 * d21 / (I1 * d32)
+    nu = fb.characteristic(I1, I2, I3)
     sq_nu = np.sqrt(nu)
     c1 = L * d31 / (I1 * I3)
     kappa = (c1 / (lamb * (1 + nu)) * sq_nu).astype(np.float64)
@@ -478,7 +302,7 @@ def _separatrix_setup(I, w):
     zero = np.zeros((n, 1))
     phi0, ct0, st0, psi0 = _separatrix_eval(c, zero, angles_only=True)
     c["C0"] = phi0
-    c["E0"] = _l_frame_quat(ct0, st0, 0.0, psi0)
+    c["E0"] = fb.euler313_quaternion(ct0, st0, 0.0, psi0)
     return c, dict(lamb=lamb, L=L, nu=nu)
 
 
@@ -497,11 +321,11 @@ def _separatrix_eval(c, t, angles_only=False):
     L1 = c["I1"] * w1
     L2 = c["I2"] * w2
     L3 = c["I3"] * w3
-    ct, st = _half_theta(L1, L2, L3)
+    ct, st = fb.half_theta(L1, L2, L3)
     psi = np.arctan2(L1, L2)
     if angles_only:
         return phi, ct, st, psi
-    q = _qmul(c["QL"], _l_frame_quat(ct, st, phi, psi))
+    q = quat.multiply_parts(c["QL"], fb.euler313_quaternion(ct, st, phi, psi))
     return q, (w1, w2, w3)
 
 
@@ -568,7 +392,7 @@ def _precession_eval(c, t):
     sb, cb = np.sin(hb), np.cos(hb)
     qL = (c["Lhat"][0] * sa, c["Lhat"][1] * sa, c["Lhat"][2] * sa, ca)
     qs = (c["es"][0] * sb, c["es"][1] * sb, c["es"][2] * sb, cb)
-    q = _qmul(_qmul(qL, c["q0"]), qs)
+    q = quat.multiply_parts(quat.multiply_parts(qL, c["q0"]), qs)
     cO = 1.0 - 2.0 * sb * sb  # cos(Omega t)
     sO = 2.0 * sb * cb  # sin(Omega t)
     w = tuple(c["wpar"][i] + cO * c["wperp"][i] - sO * c["exw"][i] for i in range(3))
@@ -578,59 +402,32 @@ def _precession_eval(c, t):
 # ===========================================================================
 # public kernel
 # ===========================================================================
-def _validate(moments, omega0, quat0, t):
-    moments = np.asarray(moments, dtype=np.float64)
-    omega0 = np.asarray(omega0, dtype=np.float64)
-    quat0 = np.asarray(quat0, dtype=np.float64)
-    t = np.atleast_1d(np.asarray(t, dtype=np.float64))
-    if moments.shape[-1:] != (3,) or omega0.shape[-1:] != (3,) or quat0.shape[-1:] != (4,):
-        raise InvalidStateError(
-            f"free_rotation: expected moments (..., 3), omega0 (..., 3), quat0 (..., 4); got "
-            f"{moments.shape}, {omega0.shape}, {quat0.shape}")
-    batch = np.broadcast_shapes(moments.shape[:-1], omega0.shape[:-1], quat0.shape[:-1])
-    if t.ndim > 1:
-        batch = np.broadcast_shapes(batch, t.shape[:-1])
-    if not np.all(np.isfinite(moments)) or np.any(moments <= 0):
-        raise InvalidInertiaError(f"principal moments must be finite and > 0, got {moments}")
-    if np.any(np.diff(moments, axis=-1) < 0):
-        raise InvalidInertiaError(f"principal moments must be sorted A <= B <= C, got {moments}")
-    if not np.all(np.isfinite(omega0)):
-        raise InvalidStateError(f"omega0 must be finite, got {omega0}")
-    if not np.all(np.isfinite(t)):
-        raise InvalidStateError("times must be finite")
-    qn = np.linalg.norm(quat0, axis=-1, keepdims=True)
-    if not np.all(np.isfinite(quat0)) or np.any(qn == 0):
-        raise InvalidStateError(f"quat0 must be a finite non-zero quaternion, got {quat0}")
-    n = int(np.prod(batch)) if batch else 1
-    I = np.broadcast_to(moments, batch + (3,)).reshape(n, 3)
-    w = np.broadcast_to(omega0, batch + (3,)).reshape(n, 3)
-    q = np.broadcast_to(quat0 / qn, batch + (4,)).reshape(n, 4)
-    T = t.shape[-1]
-    tt = t.reshape(1, T) if t.ndim == 1 else np.broadcast_to(t, batch + (T,)).reshape(n, T)
-    return batch, I, w, q, tt
+def _quaternion_then_omega(quat0, omega0, name: str):
+    """Accept the earlier ``(omega, quaternion)`` order of the kernels, with a warning:
+    the last axes (3 and 4) tell the two apart."""
+    if np.shape(quat0)[-1:] == (3,) and np.shape(omega0)[-1:] == (4,):
+        warnings.warn(f"{name}(moments, omega0, quat0, ...) is deprecated: give "
+                      f"{name}(moments, quat0, omega0, ...), the order (moments, quaternion, "
+                      "omega) of every kernel", DeprecationWarning, stacklevel=3)
+        return omega0, quat0
+    return quat0, omega0
 
 
-def _scales(I, w):
-    """Exact power-of-two scales so the kernel works on O(1) numbers."""
-    _, eI = np.frexp(I[:, 2])
-    sI = np.ldexp(1.0, eI)
-    wmax = np.max(np.abs(w), axis=1)
-    _, ew = np.frexp(np.where(wmax > 0, wmax, 1.0))
-    sw = np.ldexp(1.0, ew)
-    return sI, sw
-
-
-def free_rotation(moments, omega0, quat0, t):
+def free_rotation(moments, quat0, omega0, t):
     """Exact torque-free attitude and body rates of rigid bodies.
+
+    The bodies' frames are their principal frames (``attitude.propagate`` maps any body
+    frame to them and back).
 
     Parameters
     ----------
     moments : array_like, shape (..., 3)
         Principal moments sorted ``A <= B <= C`` (kg m^2; any consistent unit).
+    quat0 : array_like, shape (..., 4)
+        Scalar-last quaternion principal (body) -> inertial at ``t = 0`` (normalised
+        here).
     omega0 : array_like, shape (..., 3)
         Angular velocity at ``t = 0`` in principal-frame components (rad/s).
-    quat0 : array_like, shape (..., 4)
-        Scalar-last quaternion principal -> inertial at ``t = 0`` (normalised here).
     t : array_like, shape (T,) or (..., T)
         Seconds since the initial epoch (any sign, any order), shared by all bodies
         or per body.
@@ -656,53 +453,67 @@ def free_rotation(moments, omega0, quat0, t):
     Examples
     --------
     >>> import numpy as np
-    >>> q, w = free_rotation([0.61, 0.965, 1.0], [0.002, 0.0, 0.05], [0, 0, 0, 1],
+    >>> q, w = free_rotation([0.61, 0.965, 1.0], [0, 0, 0, 1], [0.002, 0.0, 0.05],
     ...                      np.linspace(0.0, 1e5, 5))
     >>> q.shape, w.shape
     ((5, 4), (5, 3))
+
+    The order of earlier releases, ``free_rotation(moments, omega0, quat0, t)``, still
+    works (told apart by the shapes) and warns with a :class:`DeprecationWarning`.
     """
-    batch, I, w, q0, tt = _validate(moments, omega0, quat0, t)
+    quat0, omega0 = _quaternion_then_omega(quat0, omega0, "free_rotation")
+    batch, I, w, q0, tt = fb.check_inputs(moments, quat0, omega0, t)
+    q, w = _evaluate(I, q0, w, tt)
+    T = tt.shape[-1]
+    return q.reshape(batch + (T, 4)), w.reshape(batch + (T, 3))
+
+
+def _evaluate(I, q0, w, tt, b2p=None):
+    """The closed form of (n, 3) bodies at (1|n, T) times, as (n, T, 4) and (n, T, 3)
+    arrays: in the principal frames, or in body frames given the body -> principal
+    quaternions ``b2p`` (n, 4), mapped block by block (:func:`exact_arrays`)."""
     n, T = I.shape[0], tt.shape[-1]
-    sI, sw = _scales(I, w)
+    sI, sw = fb.unit_scales(I, w)
     Is = I / sI[:, None]  # exact: powers of two
     ws = w / sw[:, None]
     out_q = np.empty((n, T, 4))
     out_w = np.empty((n, T, 3))
-    br, dhi, dlo = _branches(Is, ws)
-    for code in (_BR_PREC, _BR_SEP, _BR_SAM, _BR_LAM):
+    br, dhi, dlo = fb.branches(Is, ws)
+    for code in (fb.BRANCH_PRECESSION, fb.BRANCH_SEPARATRIX, fb.BRANCH_SAM, fb.BRANCH_LAM):
         idx = np.nonzero(br == code)[0]
         if idx.size == 0:
             continue
         Ig, wg, qg = Is[idx], ws[idx], q0[idx]
-        if code == _BR_PREC:
+        if code == fb.BRANCH_PRECESSION:
             c, _ = _precession_setup(Ig, wg, qg)
             ev = _precession_eval
-        elif code == _BR_SEP:
+        elif code == fb.BRANCH_SEPARATRIX:
             c, _ = _separatrix_setup(Ig, wg)
             ev = _separatrix_eval
         else:
-            c, _ = _triaxial_setup(Ig, wg, dhi[idx], dlo[idx], code == _BR_LAM)
+            c, _ = _triaxial_setup(Ig, wg, dhi[idx], dlo[idx], code == fb.BRANCH_LAM)
             ev = _triaxial_eval
-        if code != _BR_PREC:
+        if code != fb.BRANCH_PRECESSION:
             # Q_L = q0 (x) q_M^-1 (x) E0^-1 : L-frame -> inertial             (TF 23)
             qg_t = tuple(_col(qg[:, i]) for i in range(4))
             E0 = c.pop("E0")
-            if code == _BR_LAM:
-                qg_t = _qmul(qg_t, _qconj((_SQRT_HALF, 0.0, _SQRT_HALF, 0.0)))
-            c["QL"] = _qmul(qg_t, _qconj(E0))
+            if code == fb.BRANCH_LAM:
+                qg_t = quat.multiply_parts(qg_t, quat.conjugate_parts(fb.LAM_FRAME))
+            c["QL"] = quat.multiply_parts(qg_t, quat.conjugate_parts(E0))
+        if b2p is not None:       # to the body frames: q b2p, b2p^-1 w b2p   (body.py)
+            c["b2p"] = tuple(_col(b2p[idx, i]) for i in range(4))
         _run_group(ev, c, idx, tt, sw, out_q, out_w)
-    return out_q.reshape(batch + (T, 4)), out_w.reshape(batch + (T, 3))
+    return out_q, out_w
 
 
 def exact_arrays(moments, b2p, q0, w0, t):
     """Torque-free closed form of N bodies given principal moments (N, 3), body ->
     principal quaternions (N, 4), attitudes (N, 4) and body rates (N, 3): ``q (N, T, 4),
     w (N, T, 3)`` in the body frames."""
-    q_pb = quat.conjugate(b2p)
-    w0p = quat.rotate(b2p, w0)
-    q0p = quat.multiply(q0, q_pb)                                      # principal -> inertial
-    qp, wp = free_rotation(moments, w0p, q0p, t)                        # (N, T, 4), (N, T, 3)
-    return quat.multiply(qp, b2p[:, None, :]), quat.rotate(q_pb[:, None, :], wp)
+    q0p, w0p = to_principal_frame(q0, w0, b2p)                         # principal -> inertial
+    b2p = np.asarray(b2p, dtype=float).reshape(-1, 4)
+    _, I, w, q, tt = fb.check_inputs(moments, q0p, w0p, t)
+    return _evaluate(I, q, w, tt, b2p / np.linalg.norm(b2p, axis=1, keepdims=True))
 
 
 def _run_group(ev, c, idx, tt, sw, out_q, out_w):
@@ -728,6 +539,9 @@ def _run_group(ev, c, idx, tt, sw, out_q, out_w):
         swr = swg[rows][:, None]
         tb = (tg[:, cols] if shared else tg[rows, cols]) * swr
         q, wv = ev(cb, tb)
+        if "b2p" in cb:           # the frame map of to_body_frame, on the block
+            q = quat.multiply_parts(q, cb["b2p"])
+            wv = quat.rotate_parts(cb["b2p"], wv, inverse=True)
         oq = buf_q[rows, cols]
         ow = buf_w[rows, cols]
         for k in range(4):
@@ -737,400 +551,3 @@ def _run_group(ev, c, idx, tt, sw, out_q, out_w):
     if not contiguous:
         out_q[idx] = buf_q
         out_w[idx] = buf_w
-
-
-# ===========================================================================
-# analytic diagnostics
-# ===========================================================================
-@dataclass(frozen=True)
-class Diagnosis:
-    """Analytic torque-free quantities of one body and state (no propagation).
-
-    Attributes
-    ----------
-    regime : str
-        One of ``"PA-short"``, ``"PA-long"``, ``"SAM"``, ``"LAM"``, ``"separatrix"``,
-        ``"axisymmetric"``, ``"spherical"``, ``"at-rest"`` (:data:`attitude.regimes.REGIMES`).
-    periods : dict
-        Seconds, keys from :data:`attitude.regimes.PERIOD_KEYS`.  ``polhode`` (period of
-        omega in the body frame, ``4K/lambda``), ``precession`` (mean period ``P_phi`` of
-        the reference axis about L), ``rotation`` (``P_psi``, period of the rotation
-        angle about the reference axis; equal to the polhode period), ``spin``
-        (``2 pi/|omega|``, principal-axis spin).  Keys whose period does not exist for
-        the regime are absent.
-    angular_momentum : float
-        ``|L|`` (kg m^2/s).
-    kinetic_energy : float
-        ``E`` (J).
-    dynamic_inertia : float
-        ``L^2 / 2E`` (kg m^2); NaN at rest.
-    separatrix_distance : float
-        Signed complementary Jacobi parameter ``m1 = 1 - k^2`` (dimensionless, in
-        [-1, 1]): ``(C-A)(L^2-2EB) / ((C-B)(L^2-2EA))`` > 0 on the SAM side,
-        ``-(C-A)(2EB-L^2) / ((B-A)(2EC-L^2))`` < 0 on the LAM side; 0 on the
-        separatrix, +-1 for principal-axis spin about C / A.  NaN when undefined
-        (spherical body, rest).
-    nutation_range : tuple of float or None
-        ``(theta_min, theta_max)`` (rad): range of the angle between L and the
-        reference axis (:attr:`reference_axis`); ``None`` at rest.
-    stable : bool or None
-        Lyapunov stability of a principal-axis spin (False for the intermediate axis
-        and for transverse spin of an axisymmetric body); ``None`` otherwise.
-    reference_axis : int or None
-        Principal axis (1 = A, 3 = C, ...) of the Euler angles: C for SAM and the
-        separatrix, A for LAM, the symmetry axis of an axisymmetric body, the spin axis.
-    k2 : float or None
-        Jacobi parameter ``m = k^2`` (SAM/LAM; 1 on the separatrix).
-    lam : float or None
-        Jacobi frequency ``lambda`` (rad/s); rates are functions of ``lambda t``.
-    mean_precession_rate : float or None
-        ``<d phi/dt>`` (rad/s).
-    excitation : float
-        ``(E - E_min)/(E_max - E_min)`` at fixed L, with ``E_min = L^2/2C`` and
-        ``E_max = L^2/2A`` (0: spin about C, 1: spin about A); NaN if undefined.
-    energy_ratio : float
-        ``E / E0`` with ``E0 = L^2/2C`` (Pravec et al. 2014); NaN at rest.
-    branch : str
-        Propagation branch used by :func:`free_rotation` (``"elliptic"``,
-        ``"separatrix"``, ``"precession"``); can differ from the label because the
-        label uses the looser ``rtol_symmetry``.
-    omega_principal, angular_momentum_principal : ndarray (3,)
-        Rates and L in principal components.
-    angular_momentum_inertial : ndarray (3,) or None
-        L in the inertial frame (from :func:`diagnose`).
-    """
-
-    regime: str
-    periods: dict
-    angular_momentum: float
-    kinetic_energy: float
-    dynamic_inertia: float
-    separatrix_distance: float
-    nutation_range: tuple | None
-    stable: bool | None
-    reference_axis: int | None = None
-    k2: float | None = None
-    lam: float | None = None
-    mean_precession_rate: float | None = None
-    excitation: float = math.nan
-    energy_ratio: float = math.nan
-    branch: str = ""
-    omega_principal: np.ndarray = field(default=None, repr=False)
-    angular_momentum_principal: np.ndarray = field(default=None, repr=False)
-    angular_momentum_inertial: np.ndarray | None = field(default=None, repr=False)
-
-    def __post_init__(self):
-        if self.regime not in REGIMES:  # pragma: no cover - internal consistency
-            raise ValueError(f"unknown regime {self.regime!r}")
-        if not set(self.periods) <= set(PERIOD_KEYS):  # pragma: no cover
-            raise ValueError(f"unknown period keys {sorted(self.periods)}")
-
-
-def branch_of(moments, omega0):
-    """Propagation branch names (``"precession"``, ``"separatrix"``, ``"SAM"``,
-    ``"LAM"``) that :func:`free_rotation` uses, for (..., 3) inputs."""
-    moments = np.asarray(moments, dtype=float)
-    omega0 = np.asarray(omega0, dtype=float)
-    batch, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
-    sI, sw = _scales(I, w)
-    br, _, _ = _branches(I / sI[:, None], w / sw[:, None])
-    names = np.array(["precession", "separatrix", "SAM", "LAM"])
-    out = names[br]
-    return out.reshape(batch) if batch else str(out[0])
-
-
-def _atan2_sqrt(s2, c2):
-    return float(np.arctan2(np.sqrt(np.float64(s2)), np.sqrt(np.float64(c2))))
-
-
-def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
-                       quat0=None) -> Diagnosis:
-    """Analytic diagnosis from principal moments and principal-frame rates.
-
-    Parameters
-    ----------
-    moments : (3,) array_like
-        ``A <= B <= C`` (kg m^2).
-    omega0 : (3,) array_like
-        Principal-frame angular velocity (rad/s).
-    rtol_symmetry : float, optional
-        Moments within ``rtol_symmetry * C`` are equal for the *label* (default
-        ``attitude.body.SYMMETRY_RTOL``, 1e-12, the tolerance of
-        ``RigidBody.symmetry``).  Propagation itself uses :data:`RTOL_AXISYMMETRIC`.
-    rtol_spin : float, optional
-        The state is labelled principal-axis spin (``PA-short``, ``PA-long``, or
-        ``separatrix`` for the intermediate axis) when the two smaller body components
-        of L are at most ``rtol_spin * |L|`` (default: ``rtol_symmetry``), so that the
-        1e-16 wobble left by rotating a spin into the principal frame does not turn it
-        into SAM/LAM.  Propagation itself uses :data:`PURE_SPIN_TOL`.
-    quat0 : (4,) array_like, optional
-        Principal -> inertial quaternion; gives ``angular_momentum_inertial``.
-
-    Returns
-    -------
-    Diagnosis
-
-    Notes
-    -----
-    Periods (Landau & Lifshitz §37; Samarasinha & A'Hearn 1991; Kaasalainen 2001):
-    ``P_polhode = P_psi = 4 K(m) / lambda`` and ``P_phi = 2 pi / <phi'>`` with, for SAM,
-    ``<phi'> = L/C + L (C-A)/(A C) * Pi(-nu | m) / K(m)``, ``nu = C(B-A)/(A(C-B))``,
-    and for LAM the same with A and C exchanged (docs/torquefree.md, TF 31-33).
-    """
-    if rtol_symmetry is None:
-        rtol_symmetry = SYMMETRY_RTOL
-    rtol_symmetry = max(float(rtol_symmetry), RTOL_AXISYMMETRIC)  # never finer than the solver
-    rtol_spin = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
-    _, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
-    if I.shape[0] != 1:
-        raise InvalidStateError("diagnose_principal takes one body; use branch_of for batches")
-    A, B, C = (float(x) for x in I[0])
-    wv = w[0].copy()
-    Lp = I[0] * wv
-    L = float(np.sqrt(np.sum(Lp.astype(_LD) ** 2)))
-    E2 = float(np.sum(I[0].astype(_LD) * wv.astype(_LD) ** 2))
-    E = 0.5 * E2
-    Lin = None
-    if quat0 is not None:
-        q = np.asarray(quat0, dtype=float)
-        Lin = quat.rotate(q / np.linalg.norm(q), Lp)
-    base = dict(angular_momentum=L, kinetic_energy=E, omega_principal=wv,
-                angular_momentum_principal=Lp, angular_momentum_inertial=Lin)
-    if L == 0.0:
-        return Diagnosis(regime="at-rest", periods={}, dynamic_inertia=math.nan,
-                         separatrix_distance=math.nan, nutation_range=None, stable=None,
-                         branch="precession", **base)
-    wn = float(np.linalg.norm(wv))
-    D = L * L / E2
-    sI, sw = _scales(I, w)
-    Is, ws = I / sI[:, None], w / sw[:, None]
-    br, dhi, dlo = _branches(Is, ws)
-    bname = {_BR_PREC: "precession", _BR_SEP: "separatrix"}.get(int(br[0]), "elliptic")
-    # excitation (E - E_min)/(E_max - E_min) from 2EC - L^2 = A(C-A)w1^2 + B(C-B)w2^2
-    q1c = A * (C - A) * wv[0] ** 2 + B * (C - B) * wv[1] ** 2
-    exc = min(1.0, float(A * q1c / (L * L * (C - A)))) if C > A else math.nan
-    base.update(dynamic_inertia=D, excitation=exc, energy_ratio=float(1.0 + q1c / (L * L)),
-                branch=bname)
-    tol = rtol_symmetry * C
-    spin = {"spin": _TWO_PI / wn}
-    Labs = np.abs(Lp)
-    k = int(np.argmax(Labs))
-    pure = np.sort(Labs)[1] <= rtol_spin * L
-
-    def theta_of(axis):
-        c = Lp[axis] / L
-        s = math.sqrt(max(0.0, float(np.sum(np.delete(Lp, axis) ** 2)))) / L
-        return math.atan2(s, c)
-
-    if C - A <= tol:
-        th = theta_of(2)
-        return Diagnosis(regime="spherical", periods=dict(spin), separatrix_distance=math.nan,
-                         nutation_range=(th, th), stable=None, reference_axis=3, **base)
-    oblate = B - A <= tol
-    prolate = C - B <= tol
-    if pure:
-        sign = 1.0 if Lp[k] > 0 else -1.0
-        nut = (0.0, 0.0) if sign > 0 else (math.pi, math.pi)
-        if oblate or prolate:
-            sym = 2 if oblate else 0
-            if k == sym:
-                regime = "PA-short" if oblate else "PA-long"
-                return Diagnosis(regime=regime, periods=dict(spin), separatrix_distance=(
-                    1.0 if oblate else -1.0), nutation_range=nut, stable=True,
-                    reference_axis=k + 1, **base)
-            th = theta_of(sym)
-            return Diagnosis(regime="axisymmetric", periods=dict(spin, precession=spin["spin"]),
-                             separatrix_distance=0.0, nutation_range=(th, th), stable=False,
-                             reference_axis=sym + 1, **base)
-        regime = {2: "PA-short", 0: "PA-long", 1: "separatrix"}[k]
-        dist = {2: 1.0, 0: -1.0, 1: 0.0}[k]
-        return Diagnosis(regime=regime, periods=dict(spin), separatrix_distance=dist,
-                         nutation_range=nut, stable=(k != 1), reference_axis=k + 1, **base)
-    if oblate or prolate:
-        sym = 2 if oblate else 0
-        Is_ = C if oblate else A
-        It = 0.5 * (A + B) if oblate else 0.5 * (B + C)
-        Om = float(wv[sym] * (It - Is_) / It)
-        th = theta_of(sym)
-        periods = {"precession": _TWO_PI * It / L}
-        if Om != 0.0:
-            periods["polhode"] = periods["rotation"] = _TWO_PI / abs(Om)
-            dist = 1.0 if oblate else -1.0
-        else:
-            periods["spin"] = _TWO_PI / wn
-            dist = 0.0
-        return Diagnosis(regime="axisymmetric", periods=periods, separatrix_distance=dist,
-                         nutation_range=(th, th), stable=None if Om != 0.0 else False,
-                         reference_axis=sym + 1, mean_precession_rate=L / It, **base)
-    # triaxial
-    if int(br[0]) in (_BR_SEP, _BR_PREC):
-        # separatrix closed form, SAM labels: theta from theta_min to pi/2 (asymptote)
-        v = _invariants_ld(Is, ws)
-        s2 = v["I1"] * v["Q1"] / (v["d31"] * v["L2"])
-        c2 = v["I3"] * v["Q3"] / (v["d31"] * v["L2"])
-        th = _atan2_sqrt(s2[0], c2[0])
-        nut = (th, 0.5 * math.pi) if wv[2] >= 0 else (0.5 * math.pi, math.pi - th)
-        lamb = float(np.sqrt(v["d32"] * v["Q3"] / (v["I1"] * v["I2"] * v["I3"]))[0]) * sw[0]
-        return Diagnosis(regime="separatrix", periods={}, separatrix_distance=0.0,
-                         nutation_range=nut, stable=None, reference_axis=3, k2=1.0,
-                         lam=float(lamb), **base)
-    lam_side = int(br[0]) == _BR_LAM
-    _, x = _triaxial_setup(Is, ws, dhi, dlo, lam_side)
-    m1 = float(x["m1"][0])
-    if m1 < NEAR_SEPARATRIX_WARN:
-        warnings.warn(f"state is {m1:.1e} from the separatrix (1 - k^2): periods and regime "
-                      "are ill-conditioned; the motion itself is still computed exactly",
-                      NearSeparatrixWarning, stacklevel=2)
-    lamb = x["lamb"][0] * _LD(sw[0])
-    K = x["K"][0]
-    P_pol = float(4 * K / lamb)
-    # mean precession rate (TF 31): linear rate + kappa_j * (dj/dt)
-    phidot = (x["w_lin"][0] + x["kappa_j"][0] * x["sigma"] * x["lamb"][0] / (2 * K)) * _LD(sw[0])
-    L2 = x["L"][0] ** 2
-    s2min = x["I1"][0] * x["Q1"][0] / (x["d31"][0] * L2)  # nutation extremes (TF 34)
-    c2min = x["I3"][0] * x["Q3"][0] / (x["d31"][0] * L2)
-    s2max = x["I2"][0] * x["Q1"][0] / (x["d32"][0] * L2)
-    c2max = x["I3"][0] * x["Dl"][0] / (x["d32"][0] * L2)
-    tmin, tmax = _atan2_sqrt(s2min, c2min), _atan2_sqrt(s2max, c2max)
-    if x["s"][0] < 0:
-        tmin, tmax = math.pi - tmax, math.pi - tmin
-    return Diagnosis(
-        regime="LAM" if lam_side else "SAM",
-        periods={"polhode": P_pol, "precession": float(_TWO_PI / abs(phidot)),
-                 "rotation": P_pol},
-        separatrix_distance=-m1 if lam_side else m1,
-        nutation_range=(tmin, tmax), stable=None, reference_axis=1 if lam_side else 3,
-        k2=float(x["m"][0]), lam=float(lamb), mean_precession_rate=float(phidot), **base)
-
-
-def diagnose(body, state, *, rtol_symmetry=None, rtol_spin=None) -> Diagnosis:
-    """Analytic torque-free diagnosis of a body in a state (``att.diagnose``).
-
-    Parameters
-    ----------
-    body : attitude.RigidBody
-        Uses ``principal_moments`` and ``body_to_principal``.
-    state : attitude.AttitudeState
-        Uses ``omega_body`` (rad/s, body frame) and ``attitude`` (body -> inertial).
-    rtol_symmetry, rtol_spin : float, optional
-        Label tolerances, see :func:`diagnose_principal`.
-
-    Returns
-    -------
-    Diagnosis
-
-    Examples
-    --------
-    >>> import attitude as att
-    >>> from scipy.spatial.transform import Rotation
-    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
-    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.2, 0.0, 3.0])
-    >>> d = att.diagnose(body, state)
-    >>> d.regime, sorted(d.periods)
-    ('SAM', ['polhode', 'precession', 'rotation'])
-    """
-    b2p = body.body_to_principal
-    w_p = b2p.apply(np.asarray(state.omega_body, dtype=float))
-    q_p2i = (state.attitude * b2p.inv()).as_quat()
-    return diagnose_principal(body.principal_moments, w_p, rtol_symmetry=rtol_symmetry,
-                              rtol_spin=rtol_spin, quat0=q_p2i)
-
-
-def diagnose_many(moments, omega0, *, rtol_symmetry=None, rtol_spin=None) -> dict:
-    """:func:`diagnose_principal` for a batch, vectorised over bodies.
-
-    Parameters
-    ----------
-    moments : (N, 3) array_like
-        Principal moments ``A <= B <= C`` (kg m^2) of each body.
-    omega0 : (N, 3) array_like
-        Principal-frame angular velocities (rad/s).
-    rtol_symmetry, rtol_spin : float, optional
-        Label tolerances, as in :func:`diagnose_principal`.
-
-    Returns
-    -------
-    dict of (N,) arrays
-        ``regime`` (str), ``polhode``, ``precession``, ``rotation``, ``spin`` (s; NaN
-        where the period does not exist for the regime), ``energy_ratio`` (E/E0),
-        ``separatrix_distance``, ``nutation_min`` and ``nutation_max`` (rad).
-
-    Notes
-    -----
-    Triaxial SAM and LAM states (the bulk of any sampled population) are evaluated
-    together with the same formulas as :func:`diagnose_principal`; the rare special
-    cases (rest, principal-axis spin, axisymmetric or spherical bodies, the separatrix and
-    states within :data:`NEAR_SEPARATRIX_WARN` of it) are delegated to it one by one, so
-    the two agree (tested to 1e-13 relative).
-
-    Examples
-    --------
-    >>> d = diagnose_many([[0.61, 0.965, 1.0], [1.0, 2.0, 3.0]], [[0.2, 0.0, 3.0], [0, 0, 1]])
-    >>> d["regime"].tolist()
-    ['SAM', 'PA-short']
-    """
-    if rtol_symmetry is None:
-        rtol_symmetry = SYMMETRY_RTOL
-    rtol_symmetry = max(float(rtol_symmetry), RTOL_AXISYMMETRIC)
-    rtol_spin_ = max(float(rtol_symmetry if rtol_spin is None else rtol_spin), PURE_SPIN_TOL)
-    moments = np.atleast_2d(np.asarray(moments, dtype=float))
-    omega0 = np.atleast_2d(np.asarray(omega0, dtype=float))
-    _, I, w, _, _ = _validate(moments, omega0, [0.0, 0.0, 0.0, 1.0], [0.0])
-    n = I.shape[0]
-    keys = ("polhode", "precession", "rotation", "spin", "energy_ratio",
-            "separatrix_distance", "nutation_min", "nutation_max")
-    out = {k: np.full(n, np.nan) for k in keys}
-    regime = np.empty(n, dtype=object)
-    A, B, C = I[:, 0], I[:, 1], I[:, 2]
-    Lp = I * w
-    L = np.sqrt(np.sum(Lp * Lp, axis=1))
-    tol = rtol_symmetry * C
-    pure = np.sort(np.abs(Lp), axis=1)[:, 1] <= rtol_spin_ * L
-    generic = (L > 0) & ((B - A) > tol) & ((C - B) > tol) & ~pure
-    sI, sw = _scales(I, w)
-    Is, ws = I / sI[:, None], w / sw[:, None]
-    br, dhi, dlo = _branches(Is, ws)
-    generic &= (br == _BR_SAM) | (br == _BR_LAM)
-    for lam_side, code in ((False, _BR_SAM), (True, _BR_LAM)):
-        idx = np.nonzero(generic & (br == code))[0]
-        if idx.size == 0:
-            continue
-        _, x = _triaxial_setup(Is[idx], ws[idx], dhi[idx], dlo[idx], lam_side)
-        m1 = x["m1"].astype(np.float64)
-        far = m1 >= NEAR_SEPARATRIX_WARN
-        generic[idx[~far]] = False
-        idx, x = idx[far], {k: (v[far] if np.ndim(v) else v) for k, v in x.items()}
-        s_w = sw[idx].astype(_LD)
-        lamb = x["lamb"] * s_w
-        K = x["K"]
-        P_pol = (4 * K / lamb).astype(np.float64)
-        phidot = ((x["w_lin"] + x["kappa_j"] * x["sigma"] * x["lamb"] / (2 * K)) * s_w)
-        L2 = x["L"] ** 2
-        tmin = np.arctan2(np.sqrt((x["I1"] * x["Q1"] / (x["d31"] * L2)).astype(np.float64)),
-                          np.sqrt((x["I3"] * x["Q3"] / (x["d31"] * L2)).astype(np.float64)))
-        tmax = np.arctan2(np.sqrt((x["I2"] * x["Q1"] / (x["d32"] * L2)).astype(np.float64)),
-                          np.sqrt((x["I3"] * x["Dl"] / (x["d32"] * L2)).astype(np.float64)))
-        flip = x["s"] < 0
-        tmin, tmax = np.where(flip, np.pi - tmax, tmin), np.where(flip, np.pi - tmin, tmax)
-        regime[idx] = "LAM" if lam_side else "SAM"
-        out["polhode"][idx] = out["rotation"][idx] = P_pol
-        out["precession"][idx] = (_TWO_PI / np.abs(phidot)).astype(np.float64)
-        out["separatrix_distance"][idx] = -m1[far] if lam_side else m1[far]
-        out["nutation_min"][idx], out["nutation_max"][idx] = tmin, tmax
-        q1c = A[idx] * (C[idx] - A[idx]) * w[idx, 0] ** 2 + B[idx] * (C[idx] - B[idx]) \
-            * w[idx, 1] ** 2
-        out["energy_ratio"][idx] = 1.0 + q1c / L[idx] ** 2
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", NearSeparatrixWarning)
-        for i in np.nonzero(~generic)[0]:
-            d = diagnose_principal(I[i], w[i], rtol_symmetry=rtol_symmetry,
-                                   rtol_spin=rtol_spin)
-            regime[i] = d.regime
-            for k, v in d.periods.items():
-                out[k][i] = v
-            out["energy_ratio"][i] = d.energy_ratio
-            out["separatrix_distance"][i] = d.separatrix_distance
-            if d.nutation_range is not None:
-                out["nutation_min"][i], out["nutation_max"][i] = d.nutation_range
-    out["regime"] = regime.astype(str)
-    return out
