@@ -79,6 +79,9 @@ class Objective:
         for obs in self.observations:
             t = seconds_since(self.model.epoch, obs.times) if np.size(obs.times) else \
                 np.zeros(0)
+            delay = getattr(obs, "delay", None)
+            if delay is not None:
+                t = t - delay                       # light time: emission epochs
             spans.append(slice(start, start + t.size))
             t_all.append(t)
             start += t.size
@@ -145,7 +148,7 @@ class FitResult:
         Normalised residuals at the optimum (without the penalty term).
     chi2 : float
     dof : int
-        Residuals minus free parameters.
+        Residuals minus free parameters (and minus the lightcurve offsets).
     alternatives : tuple of (chi2, regime)
         The optimum reached from every start (the guess, its mirror across the
         separatrix, psi0 + pi, ...), best first: a second regime with a chi2 close to
@@ -211,7 +214,8 @@ def fit(observations, body: RigidBody, state: AttitudeState, *, free=None, start
     observations : observation or sequence of observations
         :class:`~attitude.fitting.AttitudeObservations`,
         :class:`~attitude.fitting.AngularVelocityObservations`,
-        :class:`~attitude.fitting.PeriodObservations`, in any mix.
+        :class:`~attitude.fitting.PeriodObservations`,
+        :class:`~attitude.fitting.LightcurveObservations`, in any mix.
     body, state : RigidBody, AttitudeState
         The first guess; its epoch is the epoch of the fitted state, its principal axes
         (in the body frame) and its largest moment C are kept.
@@ -310,6 +314,8 @@ def _result(sol, objective: Objective, alternatives: tuple) -> FitResult:
     gap = abs(values[2] - 1.0 / values[4])
     margin = gap / s if s > 0 else np.inf
     res = sol.fun[:-1]
+    nuisance = sum(getattr(o, "n_nuisance", 0) for o in objective.observations)
     return FitResult(bool(sol.success), str(sol.message), body, state, regime,
                      float(margin), parameters, uncertainties, covariance, names, res,
-                     float(res @ res), int(res.size - len(names)), alternatives, objective)
+                     float(res @ res), int(res.size - len(names) - nuisance), alternatives,
+                     objective)
