@@ -36,6 +36,7 @@ from .errors import *  # noqa: F403  (every exception and warning: errors.__all_
 from .fitting import (
     AngularVelocityObservations,
     AttitudeObservations,
+    LightcurveObservations,
     PeriodObservations,
     fit,
     sample_posterior,
@@ -70,6 +71,7 @@ __all__ = [
     "AttitudeObservations",
     "AngularVelocityObservations",
     "PeriodObservations",
+    "LightcurveObservations",
     "TLEOrbit",
     "IGRF",
     "SpinOrbit",

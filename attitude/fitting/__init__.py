@@ -6,7 +6,8 @@ Apophis).  The forward model is the exact torque-free solution, evaluated for ma
 parameter vectors in one vectorised call:
 
 - :mod:`~attitude.fitting.parameters` -- Pravec's parameterisation and the forward model;
-- :mod:`~attitude.fitting.observations` -- the observations, each with its uncertainties;
+- :mod:`~attitude.fitting.observations` -- attitudes, rates, periods and lightcurves, each
+  with its uncertainties;
 - :mod:`~attitude.fitting.leastsq` -- :func:`fit`: least squares with multi-start over
   the discrete ambiguities, covariance, regime and its margin;
 - :mod:`~attitude.fitting.posterior` -- :func:`sample_posterior`: MCMC with emcee (the
@@ -14,7 +15,12 @@ parameter vectors in one vectorised call:
 """
 
 from .leastsq import FitResult, fit
-from .observations import AngularVelocityObservations, AttitudeObservations, PeriodObservations
+from .observations import (
+    AngularVelocityObservations,
+    AttitudeObservations,
+    LightcurveObservations,
+    PeriodObservations,
+)
 from .parameters import PARAMETERS, RotationModel, free_parameters
 from .posterior import Posterior, sample_posterior
 
@@ -26,6 +32,7 @@ __all__ = [
     "AttitudeObservations",
     "AngularVelocityObservations",
     "PeriodObservations",
+    "LightcurveObservations",
     "PARAMETERS",
     "RotationModel",
     "free_parameters",

@@ -8,7 +8,11 @@ uncertainties (so that the sum of squares is chi^2):
   the modelled attitude over sigma;
 - :class:`AngularVelocityObservations` -- measured body rates with a 1-sigma;
 - :class:`PeriodObservations` -- periods with their 1-sigma, under the period keys of
-  :func:`attitude.diagnose` (``precession`` P_phi, ``rotation`` P_psi, ``polhode``, ``spin``).
+  :func:`attitude.diagnose` (``precession`` P_phi, ``rotation`` P_psi, ``polhode``, ``spin``);
+- :class:`LightcurveObservations` -- magnitudes with their 1-sigma, the Sun/observer
+  geometry, a shape and a scattering law: the model magnitude is the shape's brightness
+  (:func:`attitude.photometry.facet_brightness`) in the modelled attitude, plus one
+  fitted offset (the absolute magnitude is not part of the rotation state).
 
 A fit may mix them (:func:`attitude.fitting.fit`).
 """
@@ -22,11 +26,13 @@ from astropy.time import Time
 
 from .. import quaternion as quat
 from ..errors import AttitudeError
+from ..photometry.brightness import facet_brightness
+from ..photometry.geometry import Geometry
 from ..quantities import to_si
 from ..regimes import PERIOD_KEYS
 
 __all__ = ["AttitudeObservations", "AngularVelocityObservations", "PeriodObservations",
-           "seconds_since"]
+           "LightcurveObservations", "seconds_since"]
 
 
 def seconds_since(epoch: Time, times) -> np.ndarray:
@@ -205,3 +211,92 @@ class PeriodObservations:
         """(N, k) period differences over sigma (NaN where the model has no such period)."""
         return np.stack([(periods[k] - v) / s for k, (v, s) in self.periods.items()],
                         axis=-1)
+
+
+@dataclass(frozen=True)
+class LightcurveObservations:
+    """Measured magnitudes of a body of known shape, with their 1-sigma and geometry.
+
+    Parameters
+    ----------
+    times : astropy Time array, or seconds since the fit's epoch
+        Observation (reception) times; the attitude is modelled at ``times -
+        geometry.light_time`` when the geometry carries light times.
+    magnitudes : (n,) array
+    sigma : float or (n,) array
+        1-sigma of each magnitude, mag.
+    geometry : attitude.photometry.Geometry
+        Sun and observer directions (inertial frame of the fit), constant or per epoch.
+    shape : attitude.Polyhedron
+        The body's shape in the body frame of the fit.
+    law : str or scattering law
+        As in :func:`attitude.photometry.lightcurve` (default ``"ls-lambert"``).
+
+    Notes
+    -----
+    The model magnitude is ``-2.5 log10(flux) + offset`` with the offset that minimises
+    chi^2 for each model (a weighted mean; it is one more fitted number, counted in the
+    degrees of freedom by :attr:`n_nuisance`).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> shape = att.Polyhedron.ellipsoid(2.0, 1.2, 1.0, subdivisions=2)
+    >>> geom = att.Geometry(sun=[1.0, 0, 0], observer=[np.cos(0.3), np.sin(0.3), 0])
+    >>> obs = LightcurveObservations([0.0, 60.0], [15.0, 15.2], 0.01, geom, shape)
+    >>> obs.n_residuals, obs.n_nuisance
+    (2, 1)
+    """
+
+    times: object
+    magnitudes: np.ndarray
+    sigma: object
+    geometry: Geometry
+    shape: object
+    law: object = "ls-lambert"
+    delay: np.ndarray = None
+
+    n_nuisance = 1
+
+    def __post_init__(self):
+        m = np.asarray(self.magnitudes, dtype=float)
+        if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)):
+            raise AttitudeError(f"expected a non-empty 1-D array of finite magnitudes, got "
+                                f"shape {m.shape}", key="magnitudes")
+        object.__setattr__(self, "magnitudes", m)
+        object.__setattr__(self, "times", _times(self.times, m.size, "times"))
+        sig = np.asarray(self.sigma, dtype=float)
+        if sig.shape not in ((), m.shape) or not np.all(np.isfinite(sig) & (sig > 0)):
+            raise AttitudeError(f"expected one or {m.size} finite, positive magnitude "
+                                f"uncertainties", key="sigma")
+        object.__setattr__(self, "sigma", np.broadcast_to(sig, m.shape).copy())
+        if not isinstance(self.geometry, Geometry):
+            raise AttitudeError("expected an attitude.photometry.Geometry", key="geometry")
+        sun, observer = self.geometry.broadcast(m.size)
+        object.__setattr__(self, "_sun", sun)
+        object.__setattr__(self, "_observer", observer)
+        lt = self.geometry.light_time
+        object.__setattr__(self, "delay", np.zeros(m.size) if lt is None else
+                           np.broadcast_to(np.asarray(lt, dtype=float), m.shape).copy())
+
+    @property
+    def n_residuals(self) -> int:
+        """Number of residuals (one per magnitude)."""
+        return self.magnitudes.size
+
+    def model_magnitudes(self, q: np.ndarray) -> np.ndarray:
+        """(N, n) magnitudes (without the offset) of the attitudes ``q`` (N, n, 4)."""
+        inv = quat.conjugate(q)
+        sun_b = quat.rotate(inv, self._sun[None])
+        obs_b = quat.rotate(inv, self._observer[None])
+        flux, _ = facet_brightness(self.shape, sun_b.reshape(-1, 3), obs_b.reshape(-1, 3),
+                                   self.law)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return -2.5 * np.log10(flux.reshape(q.shape[:-1]))
+
+    def residuals(self, q: np.ndarray, w: np.ndarray, periods: dict) -> np.ndarray:
+        """(N, n) magnitude residuals over sigma, the best offset removed per model."""
+        model = self.model_magnitudes(q)
+        weight = 1.0 / self.sigma**2
+        offset = np.sum((self.magnitudes - model) * weight, axis=-1) / weight.sum()
+        return (model + offset[:, None] - self.magnitudes) / self.sigma

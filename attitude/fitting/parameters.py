@@ -17,6 +17,12 @@ them off a body and a state; :class:`RotationModel` goes back, for many paramete
 vectors at once, to the body-frame attitudes and rates at the observation times, with the
 exact solution (:func:`attitude.propagation.torquefree.free_rotation`).
 
+Like every parameterisation by the direction of L, this one is singular where L points to
+a pole of the inertial frame: there the right ascension of L and ``phi0`` turn about the
+same axis, the Jacobian loses a rank and a fit crawls.  Express the observations in a
+frame whose pole is away from L (an ecliptic frame for an asteroid whose L is near the
+celestial pole, say).
+
 The absolute size of the moments (``C``) is not observable from attitude or light: it is
 kept from the first guess.  So is the orientation of the principal axes in the body frame
 (the guess body's ``body_to_principal``), with the half-turn about a principal axis that

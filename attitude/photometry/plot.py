@@ -31,10 +31,8 @@ __all__ = ["lightcurve_figure", "periodogram_figure", "folded_figure",
 
 def _figure(**kw):
     try:
-        from matplotlib.backends.backend_agg import (
-            FigureCanvasAgg,  # optional ('attitude-dynamics[plot]')
-        )
-        from matplotlib.figure import Figure  # optional ('attitude-dynamics[plot]')
+        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: plot extra
+        from matplotlib.figure import Figure  # optional: plot extra
     except ImportError:
         raise PlotUnavailableError("the figures need matplotlib: pip install "
                                    "'attitude-dynamics[plot]'") from None
