@@ -39,7 +39,8 @@ from scipy.spatial.transform import Rotation
 
 from .. import quaternion as quat
 from ..body import RigidBody
-from ..propagation.torquefree import diagnose_many, free_rotation
+from ..freebody import diagnose_many
+from ..propagation.torquefree import free_rotation
 from ..sampling import tumbling_state
 from ..state import AttitudeState, direction_frame
 
@@ -106,14 +107,14 @@ class RotationModel:
         w = np.full((n, t.size, 3), np.nan)
         ok = np.setdiff1d(np.arange(n), list(bad))
         if ok.size:
-            qp, wp = free_rotation(moments[ok], w_p[ok], q_p2i[ok], t)
+            qp, wp = free_rotation(moments[ok], q_p2i[ok], w_p[ok], t)
             b2p = self.body_to_principal
             q[ok] = quat.multiply(qp, b2p[None, None, :])
             w[ok] = quat.rotate(quat.conjugate(b2p)[None, None, :], wp)
         return q, w
 
     def periods(self, values: np.ndarray) -> dict:
-        """:func:`attitude.propagation.torquefree.diagnose_many` of each parameter vector."""
+        """:func:`attitude.freebody.diagnose_many` of each parameter vector."""
         moments, _, w_p, bad = self.principal_states(values)
         good = np.isfinite(moments).all(axis=1)
         safe_m = np.where(good[:, None], moments, [1.0, 2.0, 2.5])
