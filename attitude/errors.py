@@ -33,6 +33,7 @@ __all__ = [
     "ClassificationError",
     "MissingDependencyError",
     "PlotUnavailableError",
+    "WriterError",
     "AttitudeWarning",
     "NearSeparatrixWarning",
     "InvalidBodiesWarning",
@@ -127,6 +128,11 @@ class MissingDependencyError(AttitudeError, ImportError):
 
 class PlotUnavailableError(MissingDependencyError):
     """matplotlib is not installed (``pip install 'attitude[plot]'``)."""
+
+
+class WriterError(AttitudeError, RuntimeError):
+    """An output writer used out of order (appending to a streaming writer that is not
+    open, opening it twice) or a file that was not produced."""
 
 
 class AttitudeWarning(UserWarning):

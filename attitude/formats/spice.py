@@ -21,9 +21,7 @@ expressed in the reference frame: ``R @ omega_body``.
 
 from __future__ import annotations
 
-import os
 import shutil
-import tempfile
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
@@ -31,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..ephemeris import Ephemeris
+from ..ephemeris import AtomicFiles, Ephemeris
 from ..errors import EphemerisFormatError, MissingDependencyError
 from .aem import read_aem
 
@@ -113,7 +111,8 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
         raise EphemerisFormatError("a CK holds one body: select one body of the batch")
     body_id = int(body_id)
     if body_id >= 0:
-        raise ValueError(f"body_id must be a negative NAIF ID (spacecraft), got {body_id}")
+        raise EphemerisFormatError(f"body_id must be a negative NAIF ID (spacecraft), got "
+                                   f"{body_id}", key="body_id")
     instrument_id = body_id * 1000 if instrument_id is None else int(instrument_id)
     if reference_frame is None:
         try:
@@ -126,7 +125,8 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
         raise EphemerisFormatError(f"reference_frame {reference_frame!r} is not a SPICE "
                                    "built-in frame")
     if not body_frame.replace("_", "").isalnum() or len(body_frame) > 32:
-        raise ValueError(f"body_frame {body_frame!r}: letters, digits and _ only, at most 32")
+        raise EphemerisFormatError(f"body_frame {body_frame!r}: letters, digits and _ only, "
+                                   "at most 32", key="body_frame")
     n = len(eph)
     if n < 2:
         raise EphemerisFormatError("a type 3 CK needs at least 2 samples")
@@ -154,45 +154,52 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     avvs = eph.rotation.apply(eph.dataset.angular_velocity.values)    # reference frame
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     stem = path.stem
     names = {"ck": path.name, "sclk": f"{stem}.tsc", "fk": f"{stem}.tf",
              "lsk": f"{stem}.tls", "meta": f"{stem}.tm"}
-    tmpdir = Path(tempfile.mkdtemp(prefix=f".{stem}.", dir=path.parent))
-    try:
-        _write_lsk(tmpdir / names["lsk"], lsk)
-        (tmpdir / names["sclk"]).write_text(_sclk_text(body_id, et0, eph))
-        (tmpdir / names["fk"]).write_text(_fk_text(body_id, instrument_id, body_frame,
-                                                   reference_frame))
-        (tmpdir / names["meta"]).write_text(_meta_text([names[k] for k in
-                                                        ("lsk", "sclk", "fk", "ck")]))
+    if len(set(names.values())) < len(names):
+        raise EphemerisFormatError(f"{path}: the CK needs the suffix .bc (its kernels are "
+                                   f"{', '.join(names.values())})")
+    dest = {k: path.parent / name for k, name in names.items()}
+    with AtomicFiles(*dest.values()) as files:
+        _write_lsk(files[dest["lsk"]], lsk)
+        files[dest["sclk"]].write_text(_sclk_text(body_id, et0, eph))
+        files[dest["fk"]].write_text(_fk_text(body_id, instrument_id, body_frame,
+                                              reference_frame))
+        files[dest["meta"]].write_text(_meta_text([names[k] for k in
+                                                   ("lsk", "sclk", "fk", "ck")]))
         lines = [f"Attitude ephemeris written by attitude: {n} samples, body "
                  f"{body_frame} ({instrument_id}) relative to {reference_frame}.",
                  f"Epoch {eph.dataset.attrs['epoch']} {eph.time_scale}, SCLK id {body_id} "
                  f"({TICKS_PER_SECOND} ticks/s from ET {et0!r}).",
                  f"Kernels: {names['sclk']} (SCLK), {names['fk']} (FK), {names['lsk']} (LSK)."]
         lines += [line for line in comment.splitlines() if line]
-        handle = sp.ckopn(str(tmpdir / names["ck"]), f"attitude {stem}"[:60],
-                          sum(len(x) + 1 for x in lines) + 1000)
-        try:
-            sp.dafac(handle, [x[:1000] for x in lines])
-            for i0 in range(0, n - 1, _SEGMENT_RECORDS):
-                i1 = min(n, i0 + _SEGMENT_RECORDS + 1)       # segments share boundaries
-                sl = slice(i0, i1)
-                sp.ckw03(handle, ticks[i0], ticks[i1 - 1], instrument_id, reference_frame,
-                         True, f"attitude {body_frame}"[:40], i1 - i0,
-                         np.ascontiguousarray(ticks[sl]), np.ascontiguousarray(quats[sl]),
-                         np.ascontiguousarray(avvs[sl]), 1, [ticks[i0]])
-        finally:
-            sp.ckcls(handle)
-        for name in names.values():
-            os.replace(tmpdir / name, path.parent / name)
-    finally:
-        shutil.rmtree(tmpdir, ignore_errors=True)
-    d = path.parent
-    return CKFiles(ck=path, sclk=d / names["sclk"], fk=d / names["fk"], lsk=d / names["lsk"],
-                   meta=d / names["meta"], body_id=body_id, instrument_id=instrument_id,
+        _write_ck_segments(sp, files[dest["ck"]], f"attitude {stem}"[:60], lines,
+                           ticks, quats, avvs, instrument_id, reference_frame,
+                           f"attitude {body_frame}"[:40])
+    return CKFiles(ck=path, sclk=dest["sclk"], fk=dest["fk"], lsk=dest["lsk"],
+                   meta=dest["meta"], body_id=body_id, instrument_id=instrument_id,
                    body_frame=body_frame, reference_frame=reference_frame)
+
+
+def _write_ck_segments(sp, target: Path, internal_name: str, comments: list[str],
+                       ticks, quats, avvs, instrument_id: int, reference_frame: str,
+                       segment_id: str) -> None:
+    """The type 3 CK itself: the comment area, then segments of at most
+    ``_SEGMENT_RECORDS`` records sharing their boundary records."""
+    n = len(ticks)
+    handle = sp.ckopn(str(target), internal_name, sum(len(x) + 1 for x in comments) + 1000)
+    try:
+        sp.dafac(handle, [x[:1000] for x in comments])
+        for i0 in range(0, n - 1, _SEGMENT_RECORDS):
+            i1 = min(n, i0 + _SEGMENT_RECORDS + 1)       # segments share boundaries
+            sl = slice(i0, i1)
+            sp.ckw03(handle, ticks[i0], ticks[i1 - 1], instrument_id, reference_frame,
+                     True, segment_id, i1 - i0, np.ascontiguousarray(ticks[sl]),
+                     np.ascontiguousarray(quats[sl]), np.ascontiguousarray(avvs[sl]), 1,
+                     [ticks[i0]])
+    finally:
+        sp.ckcls(handle)
 
 
 def _sclk_text(body_id: int, et0: float, eph: Ephemeris) -> str:
@@ -265,6 +272,8 @@ KERNELS_TO_LOAD = (
 
 def _write_lsk(target: Path, lsk) -> None:
     if lsk is not None:
+        if not Path(lsk).is_file():
+            raise EphemerisFormatError(f"{lsk}: no such leap-seconds kernel", key="lsk")
         shutil.copyfile(lsk, target)
         return
     try:
