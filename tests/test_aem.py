@@ -29,6 +29,8 @@ from attitude.errors import AttitudeWarning, EphemerisFormatError
 from attitude.formats import aem
 from attitude.formats.aem import AEM_WRITE_TYPES, convert, read_aem, write_aem
 
+from .aem_fixture import CASES, frozen_ephemeris
+
 DATA = Path(__file__).parent / "data"
 FORMS = {"kvn": ".aem", "xml": ".xml"}
 
@@ -868,3 +870,43 @@ def test_chunked_writing_keeps_every_line(tumbling, tmp_path, monkeypatch):
     assert epochs == list(expected.isot)
     assert _max_time_error(read_aem(path).times, tumbling.times + TimeDelta(0, format="sec")
                            ) <= 1e-9
+
+
+# --- output frozen before the writer was split into steps ------------------------------
+@pytest.mark.parametrize("name", ["written_by_attitude_0_3.aem", "written_by_attitude_0_3.xml",
+                                  "written_by_attitude_0_3_q.aem"])
+def test_output_is_byte_identical_to_the_frozen_files(tmp_path, name):
+    """Files written by the writer before its refactoring (tests/data/README.md): the same
+    ephemeris and options give the same bytes, except the CREATION_DATE (now)."""
+    out = write_aem(frozen_ephemeris(), tmp_path / name, **CASES[name])
+    stamp = re.compile(rb"(CREATION_DATE\s*[=>]\s*)\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d")
+    expected = stamp.sub(rb"\1<now>", (DATA / name).read_bytes())
+    assert stamp.sub(rb"\1<now>", out.read_bytes()) == expected
+    back = read_aem(out)                 # and it reads back to the same attitudes
+    np.testing.assert_array_equal(back.dataset.quaternion.values,
+                                  frozen_ephemeris().dataset.quaternion.values)
+
+
+def test_a_crash_while_writing_leaves_no_file_and_keeps_the_old_one(tumbling, tmp_path,
+                                                                    monkeypatch):
+    """The data lines fail half-way (the header is already written): no AEM, no temporary
+    file, and a file already at the destination is untouched."""
+    real = aem.format_epoch
+    calls = {"n": 0}
+
+    def failing(times, digits=9):
+        calls["n"] += 1
+        if calls["n"] > 2:             # START_TIME and STOP_TIME pass, the data fail
+            raise KeyboardInterrupt("simulated crash")
+        return real(times, digits)
+
+    monkeypatch.setattr(aem, "format_epoch", failing)
+    with pytest.raises(KeyboardInterrupt):
+        write_aem(tumbling, tmp_path / "crash.aem")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "crash.xml").write_text("old")
+    calls["n"] = 0
+    with pytest.raises(KeyboardInterrupt):
+        write_aem(tumbling, tmp_path / "crash.xml")
+    assert [p.name for p in tmp_path.iterdir()] == ["crash.xml"]
+    assert (tmp_path / "crash.xml").read_text() == "old"

@@ -198,8 +198,15 @@ def _write_ck_segments(sp, target: Path, internal_name: str, comments: list[str]
                      True, segment_id, i1 - i0, np.ascontiguousarray(ticks[sl]),
                      np.ascontiguousarray(quats[sl]), np.ascontiguousarray(avvs[sl]), 1,
                      [ticks[i0]])
-    finally:
-        sp.ckcls(handle)
+    except BaseException:
+        # close without ckcls, which refuses a CK without segments and would hide the
+        # original error; the temporary file is discarded anyway
+        try:
+            sp.dafcls(handle)
+        except Exception:  # noqa: BLE001
+            pass
+        raise
+    sp.ckcls(handle)
 
 
 def _sclk_text(body_id: int, et0: float, eph: Ephemeris) -> str:
