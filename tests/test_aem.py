@@ -645,6 +645,9 @@ def test_writer_refuses_what_an_aem_cannot_hold(tumbling, body, tmp_path):
         write_aem(tumbling, tmp_path / "e.aem", object_name="Ω-sat")
     with pytest.raises(EphemerisFormatError, match="together"):
         write_aem(tumbling, tmp_path / "e.aem", interpolation_method="LAGRANGE")
+    with pytest.raises(EphemerisFormatError, match="non-negative integer"):
+        write_aem(tumbling, tmp_path / "e.aem", interpolation_method="LAGRANGE",
+                  interpolation_degree="seven")
     assert not list(tmp_path.glob("e.*"))             # nothing half-written
 
 

@@ -134,6 +134,10 @@ def test_errors(eph, tmp_path):
         write_ck(att.Ephemeris(eph.dataset.assign_attrs(frame="LVLH")), tmp_path / "x.bc")
     with pytest.raises(ValueError, match="negative"):
         write_ck(eph, tmp_path / "x.bc", body_id=5)
+    for bad in ({"body_id": "spacecraft"}, {"body_id": -99.5}, {"instrument_id": []},
+                {"body_frame": 3}):
+        with pytest.raises(att.EphemerisFormatError):      # never a bare builtin error
+            write_ck(eph, tmp_path / "x.bc", **bad)
     assert list(tmp_path.iterdir()) == []
 
 

@@ -278,6 +278,12 @@ def test_stream_argument_errors(case, tmp_path):
                             torques=_torques(), method="integrator")
     with pytest.raises(att.InvalidStateError, match="block"):
         propagate_to_netcdf(body, state, np.arange(5.0), tmp_path / "n.nc", block=0)
+    for bad in ({"block": 2.5}, {"block": "10"}, {"step": -1.0, "torques": _torques()},
+                {"step": "1 s", "torques": _torques()}):
+        with pytest.raises(att.InvalidStateError):
+            propagate_to_netcdf(body, state, np.arange(5.0), tmp_path / "n.nc", **bad)
+    with pytest.raises(att.InvalidStateError, match="count"):
+        UniformTimes(0.0, 1.0, "many")
     with pytest.raises(att.InvalidStateError, match="slices"):
         UniformTimes(0.0, 1.0, 3)[1]
     with pytest.raises(att.EphemerisFormatError, match="batch"), \

@@ -1487,7 +1487,7 @@ def write_aem(ephemeris: Ephemeris, path: str | PathLike, *, form: str | None = 
         tail.append(("ANGVEL_FRAME", frame_a if angvel_in_a else frame_b))
     if interpolation_method is not None:
         tail += [("INTERPOLATION_METHOD", _text(interpolation_method, "INTERPOLATION_METHOD")),
-                 ("INTERPOLATION_DEGREE", str(int(interpolation_degree)))]
+                 ("INTERPOLATION_DEGREE", _degree(interpolation_degree))]
     out = _Output(
         kind=kind, header_comments=[_text_comment(c) for c in comments], header=header,
         provenance=(f"attitude: quaternion = rotation from REF_FRAME_A ({frame_a}) to "
@@ -1498,6 +1498,18 @@ def write_aem(ephemeris: Ephemeris, path: str | PathLike, *, form: str | None = 
         times=times, values=_state_values(kind, q, w, seq, angvel_in_a))
     writer = _write_kvn if form == "kvn" else _write_xml
     return write_atomically(path, lambda tmp: writer(tmp, out))
+
+
+def _degree(value) -> str:
+    """INTERPOLATION_DEGREE as text: a non-negative integer."""
+    try:
+        degree = int(value)
+    except (TypeError, ValueError):
+        degree = -1
+    if degree < 0 or degree != value:
+        raise EphemerisFormatError(f"interpolation_degree={value!r}: give a non-negative "
+                                   "integer", key="INTERPOLATION_DEGREE")
+    return str(degree)
 
 
 def _single_ephemeris(ephemeris) -> Ephemeris:

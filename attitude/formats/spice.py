@@ -109,11 +109,12 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     sp = _spiceypy()
     if eph.is_batch:
         raise EphemerisFormatError("a CK holds one body: select one body of the batch")
-    body_id = int(body_id)
+    body_id = _naif_id(body_id, "body_id")
     if body_id >= 0:
         raise EphemerisFormatError(f"body_id must be a negative NAIF ID (spacecraft), got "
                                    f"{body_id}", key="body_id")
-    instrument_id = body_id * 1000 if instrument_id is None else int(instrument_id)
+    instrument_id = (body_id * 1000 if instrument_id is None else
+                     _naif_id(instrument_id, "instrument_id"))
     if reference_frame is None:
         try:
             reference_frame = SPICE_FRAMES[eph.frame.upper()]
@@ -124,7 +125,8 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     if sp.namfrm(reference_frame) == 0:
         raise EphemerisFormatError(f"reference_frame {reference_frame!r} is not a SPICE "
                                    "built-in frame")
-    if not body_frame.replace("_", "").isalnum() or len(body_frame) > 32:
+    if (not isinstance(body_frame, str) or not body_frame.replace("_", "").isalnum()
+            or len(body_frame) > 32):
         raise EphemerisFormatError(f"body_frame {body_frame!r}: letters, digits and _ only, "
                                    "at most 32", key="body_frame")
     n = len(eph)
@@ -207,6 +209,19 @@ def _write_ck_segments(sp, target: Path, internal_name: str, comments: list[str]
             pass
         raise
     sp.ckcls(handle)
+
+
+def _naif_id(value, key: str) -> int:
+    """A NAIF ID given as an integer (or its text)."""
+    try:
+        number = int(value)
+    except (TypeError, ValueError):
+        raise EphemerisFormatError(f"{value!r}: a NAIF ID is an integer, such as -999",
+                                   key=key) from None
+    if number != value and str(number) != str(value).strip():
+        raise EphemerisFormatError(f"{value!r}: a NAIF ID is an integer, such as -999",
+                                   key=key)
+    return number
 
 
 def _sclk_text(body_id: int, et0: float, eph: Ephemeris) -> str:

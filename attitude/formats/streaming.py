@@ -84,8 +84,12 @@ class UniformTimes:
     """
 
     def __init__(self, start: float, step: float, count: int):
-        self.start, self.step, self.count = float(start), float(step), int(count)
-        if self.count < 0 or not (np.isfinite(self.start) and np.isfinite(self.step)):
+        try:
+            self.start, self.step, self.count = float(start), float(step), int(count)
+        except (TypeError, ValueError):
+            self.count = -1
+        if (self.count < 0 or self.count != count
+                or not (np.isfinite(self.start) and np.isfinite(self.step))):
             raise InvalidStateError(f"UniformTimes({start!r}, {step!r}, {count!r}): need a "
                                     "finite start and step and count >= 0", key="times")
 
@@ -311,7 +315,7 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
 
     Examples
     --------
-    A batch of two bodies under a constant torque, streamed 500 epochs at a time:
+    A batch of two bodies under a constant torque, streamed 50 epochs at a time:
 
     >>> import numpy as np, attitude as att, tempfile, pathlib
     >>> from scipy.spatial.transform import Rotation
@@ -319,8 +323,9 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
     >>> bodies = [att.RigidBody.from_principal_moments(m) for m in ([1, 2, 3], [2, 3, 4])]
     >>> states = [att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.0, 0.3])] * 2
     >>> out = pathlib.Path(tempfile.mkdtemp()) / "torqued.nc"
-    >>> path = propagate_to_netcdf(bodies, states, UniformTimes(0.0, 1.0, 1200), out,
-    ...                            torques=[ConstantTorque([0.0, 1e-4, 0.0])], block=500)
+    >>> path = propagate_to_netcdf(bodies, states, UniformTimes(0.0, 1.0, 120), out,
+    ...                            torques=[ConstantTorque([0.0, 1e-4, 0.0])], step=0.5,
+    ...                            block=50)
     >>> att.Ephemeris.from_netcdf(path).dataset.angular_velocity.dims
     ('body', 'time', 'axis')
     """
@@ -336,7 +341,11 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
     torques = list(torques or [])
     method = _stream_method(method, torques)
     n_bodies = len(bodies) if batch else 1
-    block = max(1, _BLOCK_SAMPLES // n_bodies) if block is None else int(block)
+    if block is None:
+        block = max(1, _BLOCK_SAMPLES // n_bodies)
+    elif not isinstance(block, (int, np.integer)):
+        raise InvalidStateError(f"block must be a whole number of epochs, got {block!r}",
+                                key="block")
     if block < 1:
         raise InvalidStateError(f"block must be >= 1 epoch, got {block}", key="block")
     if method == "exact":
@@ -355,6 +364,7 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
                     source=source if source is not None else attrs["source"], chunk=chunk)
                 writer.open()
             writer.append(eph)
+            eph = None              # free the block before the next one is computed
     except BaseException:
         if writer is not None:
             writer.abort()
@@ -391,6 +401,9 @@ def _splitting_blocks(bodies, states, times, block: int, torques, step, order):
     w = np.stack([s.omega_body for s in ([states] if single else states)])
     if step is None:
         step = choose_step(bodies, q, w, torques, order=order)
+    elif not (isinstance(step, (int, float, np.floating)) and step > 0):
+        raise InvalidStateError(f"step must be a positive number of seconds, got {step!r}",
+                                key="step")
     step = float(step) if math.isfinite(step) else None    # inf: no torque, exact flow
     name = bodies.name if single else "batch"
     title = f"attitude ephemeris{': ' + name if name else ''}"
