@@ -334,93 +334,112 @@ def _euler_seq(value: str, where: str = "", line: int | None = None) -> str:
 
 def _spec(version: str, meta: _Block) -> _Spec:
     """Check a metadata block and work out how to read its data."""
-    where = meta.where
     for key in _META_MANDATORY[version]:
         if key not in meta.items:
-            raise _error(where, meta.stop or meta.start, key,
+            raise _error(meta.where, meta.stop or meta.start, key,
                          f"mandatory keyword missing from the metadata block that starts at "
                          f"line {meta.start}")
-    raw_type = meta.get("ATTITUDE_TYPE")
-    att_type = _norm_text(raw_type).replace("_/_", "/")
-    if att_type not in _TYPES[version]:
-        if version == "2.0" and att_type in _TYPES["1.0"]:
-            hint = (f"{att_type} is an AEM version 1.0 type (replaced in version 2.0 by "
-                    f"{att_type.replace('RATE', 'ANGVEL')} and .../DERIVATIVE)")
-        elif version == "1.0" and att_type in _TYPES["2.0"]:
-            hint = f"{att_type} exists only in AEM version 2.0"
-        else:
-            hint = f"use one of {', '.join(_TYPES[version])}"
-        raise _error(where, meta.line("ATTITUDE_TYPE"), "ATTITUDE_TYPE",
-                     f"{raw_type!r} is not an AEM version {version} attitude type: {hint}")
-
-    # Frames: one inertial (ours), one body.
-    frame_a = _norm_text(meta.get("REF_FRAME_A"))
-    frame_b = _norm_text(meta.get("REF_FRAME_B"))
-    a_inertial, b_inertial = frame_a in _INERTIAL, frame_b in _INERTIAL
-    if a_inertial == b_inertial:
-        what = "both" if a_inertial else "neither"
-        raise _error(where, meta.line("REF_FRAME_A"), "REF_FRAME_A",
-                     f"REF_FRAME_A = {frame_a} and REF_FRAME_B = {frame_b}: {what} of them is "
-                     f"an inertial frame ({', '.join(INERTIAL_FRAMES)}); an attitude ephemeris "
-                     "holds the rotation between an inertial frame and the body frame "
-                     "(local orbital or Earth-fixed frames need an orbit or Earth model)")
+    att_type = _attitude_type(version, meta)
+    frame_a, frame_b, a_inertial = _ref_frames(meta)
     inertial, body_frame = (frame_a, frame_b) if a_inertial else (frame_b, frame_a)
-
-    # Direction and component order (version 1 choices).
-    fields = _FIELDS[att_type]
-    a2b = True
-    if version == "1.0":
-        direction = _norm_text(meta.get("ATTITUDE_DIR"))
-        if direction not in ("A2B", "B2A"):
-            raise _error(where, meta.line("ATTITUDE_DIR"), "ATTITUDE_DIR",
-                         f"{meta.get('ATTITUDE_DIR')!r} must be A2B or B2A")
-        a2b = direction == "A2B"
-        if att_type.startswith("QUATERNION"):
-            if "QUATERNION_TYPE" not in meta.items:
-                raise _error(where, meta.stop or meta.start, "QUATERNION_TYPE",
-                             f"mandatory for ATTITUDE_TYPE = {att_type} in AEM version 1.0 "
-                             "(FIRST or LAST: where the scalar QC stands)")
-            qtype = _norm_text(meta.get("QUATERNION_TYPE"))
-            if qtype not in ("FIRST", "LAST"):
-                raise _error(where, meta.line("QUATERNION_TYPE"), "QUATERNION_TYPE",
-                             f"{meta.get('QUATERNION_TYPE')!r} must be FIRST or LAST")
-            if qtype == "FIRST":
-                rest = fields[4:]
-                if rest == _QDOT:
-                    rest = ("QC_DOT", "Q1_DOT", "Q2_DOT", "Q3_DOT")
-                fields = ("QC", "Q1", "Q2", "Q3") + rest
+    a2b, fields = _direction_and_fields(version, meta, att_type)
     euler_seq = None
     if att_type.startswith("EULER"):
-        if "EULER_ROT_SEQ" not in meta.items:
-            raise _error(where, meta.stop or meta.start, "EULER_ROT_SEQ",
-                         f"mandatory for ATTITUDE_TYPE = {att_type}: the angles mean nothing "
-                         "without their rotation sequence")
-        euler_seq = _euler_seq(meta.get("EULER_ROT_SEQ"), where, meta.line("EULER_ROT_SEQ"))
-    angvel_in_a = False
-    if att_type.endswith("/ANGVEL"):
-        if "ANGVEL_FRAME" not in meta.items:
-            raise _error(where, meta.stop or meta.start, "ANGVEL_FRAME",
-                         f"mandatory for ATTITUDE_TYPE = {att_type}: the frame of the angular "
-                         "velocity components")
-        value = _norm_text(meta.get("ANGVEL_FRAME"))
-        if value in ("REF_FRAME_A", frame_a):
-            angvel_in_a = True
-        elif value not in ("REF_FRAME_B", frame_b):
-            raise _error(where, meta.line("ANGVEL_FRAME"), "ANGVEL_FRAME",
-                         f"{meta.get('ANGVEL_FRAME')!r} must be REF_FRAME_A ({frame_a}) or "
-                         f"REF_FRAME_B ({frame_b}); components in a third frame cannot be "
-                         "converted without its orientation")
-
-    # Time system.
+        _require(meta, "EULER_ROT_SEQ", f"mandatory for ATTITUDE_TYPE = {att_type}: the "
+                 "angles mean nothing without their rotation sequence")
+        euler_seq = _euler_seq(meta.get("EULER_ROT_SEQ"), meta.where,
+                               meta.line("EULER_ROT_SEQ"))
+    angvel_in_a = att_type.endswith("/ANGVEL") and _angvel_frame_is_a(meta, att_type,
+                                                                       frame_a, frame_b)
     time_system = _norm_text(meta.get("TIME_SYSTEM"))
     if time_system not in AEM_TIME_SYSTEMS:
-        raise _error(where, meta.line("TIME_SYSTEM"), "TIME_SYSTEM",
+        raise _error(meta.where, meta.line("TIME_SYSTEM"), "TIME_SYSTEM",
                      f"{meta.get('TIME_SYSTEM')!r} is not supported: use one of "
                      f"{', '.join(AEM_TIME_SYSTEMS)} (mission, spacecraft-clock and sidereal "
                      "time systems need mission data to become a time scale)")
     scale, offset = AEM_TIME_SYSTEMS[time_system]
     return _Spec(att_type, fields, euler_seq, inertial, body_frame, a_inertial, a2b,
                  angvel_in_a, time_system, scale, offset)
+
+
+def _require(meta: _Block, key: str, message: str) -> None:
+    """A keyword that the other keywords make mandatory."""
+    if key not in meta.items:
+        raise _error(meta.where, meta.stop or meta.start, key, message)
+
+
+def _attitude_type(version: str, meta: _Block) -> str:
+    """``ATTITUDE_TYPE``, normalised, one of the version's types."""
+    raw_type = meta.get("ATTITUDE_TYPE")
+    att_type = _norm_text(raw_type).replace("_/_", "/")
+    if att_type in _TYPES[version]:
+        return att_type
+    if version == "2.0" and att_type in _TYPES["1.0"]:
+        hint = (f"{att_type} is an AEM version 1.0 type (replaced in version 2.0 by "
+                f"{att_type.replace('RATE', 'ANGVEL')} and .../DERIVATIVE)")
+    elif version == "1.0" and att_type in _TYPES["2.0"]:
+        hint = f"{att_type} exists only in AEM version 2.0"
+    else:
+        hint = f"use one of {', '.join(_TYPES[version])}"
+    raise _error(meta.where, meta.line("ATTITUDE_TYPE"), "ATTITUDE_TYPE",
+                 f"{raw_type!r} is not an AEM version {version} attitude type: {hint}")
+
+
+def _ref_frames(meta: _Block) -> tuple[str, str, bool]:
+    """``REF_FRAME_A``, ``REF_FRAME_B`` and whether A is the inertial one: exactly one of
+    them must be an inertial frame (ours), the other is the body frame."""
+    frame_a = _norm_text(meta.get("REF_FRAME_A"))
+    frame_b = _norm_text(meta.get("REF_FRAME_B"))
+    a_inertial, b_inertial = frame_a in _INERTIAL, frame_b in _INERTIAL
+    if a_inertial == b_inertial:
+        what = "both" if a_inertial else "neither"
+        raise _error(meta.where, meta.line("REF_FRAME_A"), "REF_FRAME_A",
+                     f"REF_FRAME_A = {frame_a} and REF_FRAME_B = {frame_b}: {what} of them is "
+                     f"an inertial frame ({', '.join(INERTIAL_FRAMES)}); an attitude ephemeris "
+                     "holds the rotation between an inertial frame and the body frame "
+                     "(local orbital or Earth-fixed frames need an orbit or Earth model)")
+    return frame_a, frame_b, a_inertial
+
+
+def _direction_and_fields(version: str, meta: _Block, att_type: str
+                          ) -> tuple[bool, tuple[str, ...]]:
+    """Whether the data rotate A to B, and the data items in file order (version 1
+    chooses both: ``ATTITUDE_DIR``, ``QUATERNION_TYPE``; version 2 fixes them)."""
+    fields = _FIELDS[att_type]
+    if version != "1.0":
+        return True, fields
+    direction = _norm_text(meta.get("ATTITUDE_DIR"))
+    if direction not in ("A2B", "B2A"):
+        raise _error(meta.where, meta.line("ATTITUDE_DIR"), "ATTITUDE_DIR",
+                     f"{meta.get('ATTITUDE_DIR')!r} must be A2B or B2A")
+    if att_type.startswith("QUATERNION"):
+        _require(meta, "QUATERNION_TYPE", f"mandatory for ATTITUDE_TYPE = {att_type} in AEM "
+                 "version 1.0 (FIRST or LAST: where the scalar QC stands)")
+        qtype = _norm_text(meta.get("QUATERNION_TYPE"))
+        if qtype not in ("FIRST", "LAST"):
+            raise _error(meta.where, meta.line("QUATERNION_TYPE"), "QUATERNION_TYPE",
+                         f"{meta.get('QUATERNION_TYPE')!r} must be FIRST or LAST")
+        if qtype == "FIRST":
+            rest = fields[4:]
+            if rest == _QDOT:
+                rest = ("QC_DOT", "Q1_DOT", "Q2_DOT", "Q3_DOT")
+            fields = ("QC", "Q1", "Q2", "Q3") + rest
+    return direction == "A2B", fields
+
+
+def _angvel_frame_is_a(meta: _Block, att_type: str, frame_a: str, frame_b: str) -> bool:
+    """Whether ``ANGVEL_FRAME`` names REF_FRAME_A (else REF_FRAME_B; no third frame)."""
+    _require(meta, "ANGVEL_FRAME", f"mandatory for ATTITUDE_TYPE = {att_type}: the frame of "
+             "the angular velocity components")
+    value = _norm_text(meta.get("ANGVEL_FRAME"))
+    if value in ("REF_FRAME_A", frame_a):
+        return True
+    if value in ("REF_FRAME_B", frame_b):
+        return False
+    raise _error(meta.where, meta.line("ANGVEL_FRAME"), "ANGVEL_FRAME",
+                 f"{meta.get('ANGVEL_FRAME')!r} must be REF_FRAME_A ({frame_a}) or "
+                 f"REF_FRAME_B ({frame_b}); components in a third frame cannot be "
+                 "converted without its orientation")
 
 
 # --- header and metadata blocks (both forms) -------------------------------------------
