@@ -223,6 +223,8 @@ class EphemerisWriter:
     # --- data -------------------------------------------------------------------------
     def append(self, eph: Ephemeris) -> None:
         """Append a block; it must share the writer's epoch, frame and bodies."""
+        if self._nc is None:
+            raise WriterError("EphemerisWriter is not open (use it as a context manager)")
         ds = eph.dataset
         if eph.is_batch != self.batch:
             raise EphemerisFormatError(
