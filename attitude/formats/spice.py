@@ -132,28 +132,10 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     n = len(eph)
     if n < 2:
         raise EphemerisFormatError("a type 3 CK needs at least 2 samples")
-    t = eph.time
-    if not np.all(np.diff(t) > 0):
+    if not np.all(np.diff(eph.time) > 0):
         raise EphemerisFormatError("time must increase strictly")
-
-    # ET (TDB seconds past J2000) of the first sample, and ticks since it
-    epoch_tdb = eph.epoch.tdb
-    first = epoch_tdb + TimeDelta(t[0], format="sec") if eph.time_scale == "TDB" else \
-        eph.times[0].tdb
-    et0 = float((first - _J2000_TDB).to_value("s"))
-    if eph.time_scale == "TDB":
-        since = t - t[0]
-    else:
-        since = (eph.times.tdb - first).to_value("s")
-    ticks = np.asarray(since, dtype=float) * TICKS_PER_SECOND
-    if not np.all(np.diff(ticks) > 0) or ticks[-1] >= _MODULI[0] * _MODULI[1] - 1:
-        raise EphemerisFormatError("time span too long for the SCLK partition (136 years)")
-
-    q = eph.dataset.quaternion.values
-    quats = np.column_stack([q[:, 3], -q[:, 0], -q[:, 1], -q[:, 2]])  # C-matrix, scalar-first
-    dots = np.einsum("ij,ij->i", quats[1:], quats[:-1])               # continuous signs
-    quats *= np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])[:, None]
-    avvs = eph.rotation.apply(eph.dataset.angular_velocity.values)    # reference frame
+    et0, ticks = _sclk_ticks(eph)
+    quats, avvs = _ck_records(eph)
 
     path = Path(path)
     stem = path.stem
@@ -182,6 +164,33 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     return CKFiles(ck=path, sclk=dest["sclk"], fk=dest["fk"], lsk=dest["lsk"],
                    meta=dest["meta"], body_id=body_id, instrument_id=instrument_id,
                    body_frame=body_frame, reference_frame=reference_frame)
+
+
+def _sclk_ticks(eph: Ephemeris) -> tuple[float, np.ndarray]:
+    """ET (TDB seconds past J2000) of the first sample, and the SCLK ticks of every
+    sample since it (:data:`TICKS_PER_SECOND` per TDB second)."""
+    t = eph.time
+    if eph.time_scale == "TDB":
+        first = eph.epoch.tdb + TimeDelta(t[0], format="sec")
+        since = t - t[0]
+    else:
+        first = eph.times[0].tdb
+        since = (eph.times.tdb - first).to_value("s")
+    et0 = float((first - _J2000_TDB).to_value("s"))
+    ticks = np.asarray(since, dtype=float) * TICKS_PER_SECOND
+    if not np.all(np.diff(ticks) > 0) or ticks[-1] >= _MODULI[0] * _MODULI[1] - 1:
+        raise EphemerisFormatError("time span too long for the SCLK partition (136 years)")
+    return et0, ticks
+
+
+def _ck_records(eph: Ephemeris) -> tuple[np.ndarray, np.ndarray]:
+    """C-matrix quaternions (scalar first, signs kept continuous from one record to the
+    next) and angular velocities in the reference frame, rad/s."""
+    q = eph.dataset.quaternion.values
+    quats = np.column_stack([q[:, 3], -q[:, 0], -q[:, 1], -q[:, 2]])
+    dots = np.einsum("ij,ij->i", quats[1:], quats[:-1])
+    quats *= np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])[:, None]
+    return quats, eph.rotation.apply(eph.dataset.angular_velocity.values)
 
 
 def _write_ck_segments(sp, target: Path, internal_name: str, comments: list[str],
