@@ -913,3 +913,13 @@ def test_a_crash_while_writing_leaves_no_file_and_keeps_the_old_one(tumbling, tm
         write_aem(tumbling, tmp_path / "crash.xml")
     assert [p.name for p in tmp_path.iterdir()] == ["crash.xml"]
     assert (tmp_path / "crash.xml").read_text() == "old"
+
+
+def test_errors_take_the_one_error_shape(tmp_path):
+    path = _write(tmp_path, "CCSDS_AEM_VERS = 3.0\n", "v3.aem")
+    with pytest.raises(EphemerisFormatError) as info:
+        read_aem(path)
+    err = info.value
+    assert (err.key, err.path, err.line) == ("CCSDS_AEM_VERS", str(path), 1)
+    assert str(err) == f"{path}, line 1: CCSDS_AEM_VERS: {err.reason}"
+    assert err.reason.startswith("version '3.0' is not supported")

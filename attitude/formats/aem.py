@@ -212,11 +212,12 @@ _CHUNK = 20_000                 # data lines formatted at a time when writing
 
 # --- errors -------------------------------------------------------------------------
 def _error(where: str, line: int | None, keyword: str, message: str) -> EphemerisFormatError:
-    """``"<file>, line <n>: <KEYWORD>: <message>"``, with the parts as attributes."""
+    """``"<file>, line <n>: <KEYWORD>: <message>"`` in the one error shape
+    (``key`` the keyword); ``path`` is the file and ``line`` its line (``keyword`` is
+    ``key`` under its AEM name)."""
     loc = f"{where}, line {line}" if line else where
-    err = EphemerisFormatError(f"{loc}: {keyword}: {message}" if loc else
-                               f"{keyword}: {message}")
-    err.path, err.line, err.keyword = where, line, keyword
+    err = EphemerisFormatError(message, key=keyword, path=loc or None)
+    err.path, err.line, err.keyword = where or None, line, keyword
     return err
 
 
