@@ -1,9 +1,10 @@
 r"""Rotation-state classification of an attitude ephemeris (``att.classify``).
 
 From any ephemeris (any propagator, or a file read back) this module names the regime
-(API.md: ``PA-short``, ``PA-long``, ``SAM``, ``LAM``, ``separatrix``, ``axisymmetric``,
-``spherical``, ``at-rest``, ``chaotic``), with its measured periods, nutation, excitation,
-the margin to the nearest boundary and a confidence; resolves it in time over sliding
+(docs/diagnostics.md, "Classification rules": ``PA-short``, ``PA-long``, ``SAM``, ``LAM``,
+``separatrix``, ``axisymmetric``, ``spherical``, ``at-rest``, ``chaotic``), with its
+measured periods, nutation, excitation, the margin to the nearest boundary and a
+confidence; resolves it in time over sliding
 windows; and, when asked, tests for chaos with a finite-time Lyapunov exponent.
 
 Every threshold is a field of :class:`Thresholds` (documented there and in
@@ -120,11 +121,11 @@ class Classification:
     Attributes
     ----------
     regime : str
-        API.md class name (the dominant one for a run that changes regime; see
+        Regime name of docs/diagnostics.md (the dominant one for a run that changes regime; see
         :attr:`segments`), or ``"chaotic"``.
     periods : dict
-        Measured periods (s), API.md keys (``polhode``, ``precession``, ``rotation``,
-        ``spin``), over the span of the dominant regime.
+        Measured periods (s), keys of docs/diagnostics.md (``polhode``, ``precession``,
+        ``rotation``, ``spin``), over the span of the dominant regime.
     period_uncertainties : dict
         One-sigma uncertainties (s) of :attr:`periods`.
     margin : float

@@ -576,7 +576,8 @@ def _polhode_crossings(series: PrincipalSeries, angles: dict, stencil: int):
 
 def measure_periods(source, *, body_index: int | None = None, reference_axis: int | None = None,
                     keys=None, stencil: int = STENCIL) -> dict[str, MeasuredPeriod]:
-    """Periods measured from the series of an ephemeris (API.md period keys).
+    """Periods measured from the series of an ephemeris (the keys of docs/diagnostics.md,
+    "Measured periods").
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Time-tagged attitude ephemerides: an ``xarray.Dataset`` with a fixed schema.
 
-Schema (see API.md):
+Schema (docs/states_and_ephemerides.md, "The ephemeris dataset"):
 
 ========================  ============================================  ==================
 variable                  dims                                          meaning
@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import tempfile
 from datetime import UTC, datetime
 from os import PathLike
@@ -38,11 +39,12 @@ from scipy.spatial.transform import Rotation
 
 from . import quaternion as quat
 from .body import RigidBody
-from .errors import EphemerisFormatError
+from .errors import EphemerisFormatError, WriterError
+from .state import format_epoch
 from .version import __version__
 
 __all__ = ["Ephemeris", "QUATERNION_CONVENTION", "TIME_CALENDAR", "time_attributes",
-           "time_from_file"]
+           "time_from_file", "AtomicFiles", "write_atomically"]
 
 QUATERNION_CONVENTION = "scalar-last, body-to-inertial"
 _REQUIRED_VARIABLES = ("quaternion", "angular_velocity")
@@ -57,7 +59,7 @@ TIME_CALENDAR = "proleptic_gregorian"
 #: String labels (``x y z w``, ``x y z``, body names).  In the netCDF file the labels of a
 #: dimension are a string-valued coordinate variable stored as a char array (CF 6.1;
 #: netCDF4 ``_Encoding = "utf-8"``), so that any netCDF reader (xarray included) finds the
-#: coordinate values that API.md promises.  Older files wrote them as ``<dim>_label``
+#: coordinate values that the schema promises.  Older files wrote them as ``<dim>_label``
 #: variables: :meth:`Ephemeris.from_netcdf` still reads those.
 _LABEL_ATTRS = {
     "quaternion_component": {"long_name": "quaternion component (x, y, z vector part; "
@@ -370,7 +372,7 @@ def build_dataset(time, q, w, L, E, *, inertia, moments, names, single, epoch, f
     now = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs = {
         "title": title,
-        "epoch": _isot9(epoch),
+        "epoch": format_epoch(epoch),
         "time_scale": epoch.scale.upper(),
         "frame": frame,
         "quaternion_convention": QUATERNION_CONVENTION,
@@ -454,7 +456,7 @@ def time_attributes(epoch: Time) -> dict[str, str]:
     >>> attrs["standard_name"], attrs["axis"], attrs["calendar"], attrs["time_scale"]
     ('time', 'T', 'proleptic_gregorian', 'TDB')
     """
-    iso, scale = _isot9(epoch), epoch.scale.upper()
+    iso, scale = format_epoch(epoch), epoch.scale.upper()
     return {
         "standard_name": "time",
         "long_name": f"time ({scale})",
@@ -530,7 +532,7 @@ def time_from_file(ds: xr.Dataset) -> xr.Dataset:
         if factor != 1.0 or abs(offset) >= 0.5e-9:   # same epoch to the ns: values as they are
             values = values * factor + offset
     ds = ds.assign_coords(time=("time", values, {**time.attrs, **time_attributes(epoch)}))
-    ds.attrs.setdefault("epoch", _isot9(epoch))
+    ds.attrs.setdefault("epoch", format_epoch(epoch))
     ds.attrs.setdefault("time_scale", scale.upper())
     return ds
 
@@ -548,7 +550,7 @@ def _parse_epoch(text, scale: str, key: str) -> Time:
 
 def _from_file_dataset(ds: xr.Dataset) -> xr.Dataset:
     """Decode char-array labels to strings; map ``<dim>_label`` variables of older files
-    back to the coordinates of API.md."""
+    back to the coordinates of the schema."""
     for dim in ("quaternion_component", "axis"):
         label = dim + _LABEL_SUFFIX
         if label in ds.variables and dim not in ds.variables:
@@ -599,24 +601,143 @@ def _chunks(dims, shape, time_chunk: int | None = None) -> tuple[int, ...]:
     return tuple(out[d] for d in dims)
 
 
-def write_atomically(path: Path, write) -> Path:
-    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+class AtomicFiles:
+    """Write files so that each appears complete or not at all.
+
+    Each destination is written under a temporary name in a hidden folder next to it
+    (same directory, hence same file system); :meth:`commit` flushes every temporary
+    file to disk (``fsync``) and renames it onto its destination (``os.replace``, atomic
+    on POSIX and Windows), :meth:`discard` deletes them.  As a context manager it
+    commits on a normal exit and discards on an exception, so a crash in the middle of a
+    write leaves neither a truncated file nor a temporary one, and an existing
+    destination untouched.  The temporary file carries the destination's own name (so
+    tools that look at the suffix, or a SPICE meta-kernel that names its kernels, work
+    on it) and does not exist until written.
+
+    Parameters
+    ----------
+    *paths : str or path-like
+        The destinations.  Their folders are created when missing.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> with AtomicFiles(folder / "a.txt", folder / "b.txt") as files:
+    ...     _ = files[folder / "a.txt"].write_text("first")
+    ...     _ = files[folder / "b.txt"].write_text("second")
+    >>> sorted(p.name for p in folder.iterdir())
+    ['a.txt', 'b.txt']
+    >>> try:
+    ...     with AtomicFiles(folder / "a.txt") as files:
+    ...         _ = files[folder / "a.txt"].write_text("half")
+    ...         raise KeyboardInterrupt          # a crash in the middle of the write
+    ... except KeyboardInterrupt:
+    ...     pass
+    >>> (folder / "a.txt").read_text(), sorted(p.name for p in folder.iterdir())
+    ('first', ['a.txt', 'b.txt'])
+    """
+
+    def __init__(self, *paths: str | PathLike):
+        self.paths = tuple(Path(p) for p in paths)
+        if len(set(self.paths)) != len(self.paths):
+            raise WriterError(f"the same destination twice in {[str(p) for p in paths]}")
+        self._folders: dict[Path, Path] | None = None
+
+    def open(self) -> AtomicFiles:
+        """Create the temporary folders (one per destination folder)."""
+        if self._folders is not None:
+            raise WriterError("AtomicFiles: already open")
+        self._folders = {}
+        try:
+            for parent in dict.fromkeys(p.parent for p in self.paths):
+                parent.mkdir(parents=True, exist_ok=True)
+                self._folders[parent] = Path(tempfile.mkdtemp(
+                    prefix=f".{self.paths[0].name}.", suffix=".tmp", dir=parent))
+        except BaseException:
+            self.discard()
+            raise
+        return self
+
+    def __getitem__(self, path: str | PathLike) -> Path:
+        """The temporary path to write in place of destination ``path``."""
+        path = Path(path)
+        if self._folders is None:
+            raise WriterError("AtomicFiles: not open (use it in a with block)")
+        if path not in self.paths:
+            raise WriterError(f"{path} is not a destination of this AtomicFiles "
+                              f"({', '.join(map(str, self.paths))})")
+        return self._folders[path.parent] / path.name
+
+    def commit(self) -> tuple[Path, ...]:
+        """Flush every temporary file to disk and rename it onto its destination."""
+        try:
+            for path in self.paths:
+                tmp = self[path]
+                if not tmp.is_file():
+                    raise WriterError(f"{path}: nothing was written")
+                with open(tmp, "rb+") as fh:
+                    os.fsync(fh.fileno())
+            for path in self.paths:
+                os.replace(self[path], path)
+            for parent in self._folders:
+                _fsync_folder(parent)
+        finally:
+            self.discard()
+        return self.paths
+
+    def discard(self) -> None:
+        """Delete the temporary files; the destinations are left as they were."""
+        for folder in (self._folders or {}).values():
+            shutil.rmtree(folder, ignore_errors=True)
+        self._folders = None
+
+    def __enter__(self) -> AtomicFiles:
+        return self.open()
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.commit()
+        else:
+            self.discard()
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make a rename durable: fsync the folder (POSIX; Windows cannot open folders)."""
+    if os.name != "posix":
+        return
+    fd = os.open(folder, os.O_RDONLY)
     try:
-        write(tmp)
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def write_atomically(path: str | PathLike, write) -> Path:
+    """Call ``write(tmp_path)`` and rename the temporary file onto ``path`` when it
+    returns (:class:`AtomicFiles` for one file): ``path`` is either the complete new
+    file or left as it was.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The destination.
+    write : callable
+        ``write(tmp_path)`` writes the whole file at ``tmp_path`` (a :class:`~pathlib.Path`
+        that does not exist yet).
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "report.txt"
+    >>> write_atomically(out, lambda tmp: tmp.write_text("done")).read_text()
+    'done'
+    """
+    path = Path(path)
+    with AtomicFiles(path) as files:
+        write(files[path])
     return path
-
-
-def _isot9(epoch: Time) -> str:
-    t = epoch.copy()
-    t.precision = 9
-    return t.isot

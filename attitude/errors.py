@@ -36,6 +36,7 @@ __all__ = [
     "PhotometryError",
     "LightcurveFormatError",
     "PlotUnavailableError",
+    "WriterError",
     "AttitudeWarning",
     "NearSeparatrixWarning",
     "InvalidBodiesWarning",
@@ -147,6 +148,11 @@ class PhotometryError(AttitudeError, ValueError):
 class LightcurveFormatError(AttitudeError, ValueError):
     """An observed lightcurve file (ALCDEF, CSV, netCDF) that does not follow its
     format; the message names the line."""
+
+
+class WriterError(AttitudeError, RuntimeError):
+    """An output writer used out of order (appending to a streaming writer that is not
+    open, opening it twice) or a file that was not produced."""
 
 
 class AttitudeWarning(UserWarning):

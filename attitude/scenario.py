@@ -635,7 +635,7 @@ class RunResult:
         return dict(self.classification.periods) if self.classification is not None else {}
 
     def report(self) -> dict:
-        """The ``--report`` JSON document (API.md), with an ``ensemble`` entry for an
+        """The ``--report`` JSON document (docs/scenarios.md), with an ``ensemble`` entry for an
         ensemble run."""
         doc = {
             "scenario": self.scenario.name,
@@ -774,7 +774,7 @@ def _compute(*objects):
 
 #: Reductions of a time series for ``[expect.variables]``.
 REDUCTIONS = ("start", "end", "max", "min", "mean")
-#: Variables of the base ephemeris dataset (API.md) and their units.
+#: Variables of the base ephemeris dataset (docs/states_and_ephemerides.md) and their units.
 BASE_VARIABLES = {"quaternion": "1", "angular_velocity": "rad s-1",
                   "angular_momentum": "kg m2 s-1", "kinetic_energy": "J"}
 _VARIABLE_KEYS = ("variable", "at", "component", "value", "unit", "rel_tol", "abs_tol")

@@ -22,7 +22,7 @@ from .errors import InvalidStateError
 from .quantities import to_si
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
-           "direction_frame", "spin_axis_quaternion", "stack_states"]
+           "direction_frame", "spin_axis_quaternion", "stack_states", "format_epoch"]
 
 #: Inertial frame labels accepted (case-insensitive).  No frame conversion is ever done:
 #: the label travels with the data.  ``INERTIAL`` is a generic label for synthetic studies.
@@ -64,6 +64,42 @@ def as_epoch(epoch, *, error=InvalidStateError) -> Time:
     if not epoch.isscalar:
         raise error(f"epoch: expected a single time, got an array of shape {epoch.shape}")
     return epoch
+
+
+def format_epoch(time: Time, digits: int = 9) -> str | np.ndarray:
+    """ISO 8601 calendar text (``isot``) of ``time`` with ``digits`` decimals of seconds.
+
+    The text is taken from astropy's two-double representation, so with the default 9
+    digits an epoch is exact to 0.5 ns; ``time`` itself is not modified (a copy carries
+    the precision).  This is how ephemeris files write epochs (the netCDF ``epoch``
+    attribute, the CCSDS AEM time tags).
+
+    Parameters
+    ----------
+    time : astropy.time.Time
+        A scalar or an array of times; the text is in its own time scale.
+    digits : int
+        Decimals of the seconds, 0 to 9.
+
+    Returns
+    -------
+    str or numpy.ndarray of str
+        One string for a scalar time, an array of strings of the same shape otherwise.
+
+    Examples
+    --------
+    >>> from astropy.time import Time, TimeDelta
+    >>> t = Time("2029-04-13T21:46:00", scale="tdb") + TimeDelta(1e-9, format="sec")
+    >>> format_epoch(t)
+    '2029-04-13T21:46:00.000000001'
+    >>> format_epoch(t, digits=3)
+    '2029-04-13T21:46:00.000'
+    >>> format_epoch(t + TimeDelta([0.0, 0.5], format="sec"), digits=1).tolist()
+    ['2029-04-13T21:46:00.0', '2029-04-13T21:46:00.5']
+    """
+    copy = time.copy()
+    copy.precision = int(digits)
+    return copy.isot
 
 
 def as_omega(omega, *, name: str = "omega_body", error=InvalidStateError) -> np.ndarray:

@@ -29,6 +29,8 @@ from attitude.errors import AttitudeWarning, EphemerisFormatError
 from attitude.formats import aem
 from attitude.formats.aem import AEM_WRITE_TYPES, convert, read_aem, write_aem
 
+from .aem_fixture import CASES, frozen_ephemeris
+
 DATA = Path(__file__).parent / "data"
 FORMS = {"kvn": ".aem", "xml": ".xml"}
 
@@ -643,6 +645,9 @@ def test_writer_refuses_what_an_aem_cannot_hold(tumbling, body, tmp_path):
         write_aem(tumbling, tmp_path / "e.aem", object_name="Ω-sat")
     with pytest.raises(EphemerisFormatError, match="together"):
         write_aem(tumbling, tmp_path / "e.aem", interpolation_method="LAGRANGE")
+    with pytest.raises(EphemerisFormatError, match="non-negative integer"):
+        write_aem(tumbling, tmp_path / "e.aem", interpolation_method="LAGRANGE",
+                  interpolation_degree="seven")
     assert not list(tmp_path.glob("e.*"))             # nothing half-written
 
 
@@ -868,3 +873,53 @@ def test_chunked_writing_keeps_every_line(tumbling, tmp_path, monkeypatch):
     assert epochs == list(expected.isot)
     assert _max_time_error(read_aem(path).times, tumbling.times + TimeDelta(0, format="sec")
                            ) <= 1e-9
+
+
+# --- output frozen before the writer was split into steps ------------------------------
+@pytest.mark.parametrize("name", ["written_by_attitude_0_3.aem", "written_by_attitude_0_3.xml",
+                                  "written_by_attitude_0_3_q.aem"])
+def test_output_is_byte_identical_to_the_frozen_files(tmp_path, name):
+    """Files written by the writer before its refactoring (tests/data/README.md): the same
+    ephemeris and options give the same bytes, except the CREATION_DATE (now)."""
+    out = write_aem(frozen_ephemeris(), tmp_path / name, **CASES[name])
+    stamp = re.compile(rb"(CREATION_DATE\s*[=>]\s*)\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d")
+    expected = stamp.sub(rb"\1<now>", (DATA / name).read_bytes())
+    assert stamp.sub(rb"\1<now>", out.read_bytes()) == expected
+    back = read_aem(out)                 # and it reads back to the same attitudes
+    np.testing.assert_array_equal(back.dataset.quaternion.values,
+                                  frozen_ephemeris().dataset.quaternion.values)
+
+
+def test_a_crash_while_writing_leaves_no_file_and_keeps_the_old_one(tumbling, tmp_path,
+                                                                    monkeypatch):
+    """The data lines fail half-way (the header is already written): no AEM, no temporary
+    file, and a file already at the destination is untouched."""
+    real = aem.format_epoch
+    calls = {"n": 0}
+
+    def failing(times, digits=9):
+        calls["n"] += 1
+        if calls["n"] > 2:             # START_TIME and STOP_TIME pass, the data fail
+            raise KeyboardInterrupt("simulated crash")
+        return real(times, digits)
+
+    monkeypatch.setattr(aem, "format_epoch", failing)
+    with pytest.raises(KeyboardInterrupt):
+        write_aem(tumbling, tmp_path / "crash.aem")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "crash.xml").write_text("old")
+    calls["n"] = 0
+    with pytest.raises(KeyboardInterrupt):
+        write_aem(tumbling, tmp_path / "crash.xml")
+    assert [p.name for p in tmp_path.iterdir()] == ["crash.xml"]
+    assert (tmp_path / "crash.xml").read_text() == "old"
+
+
+def test_errors_take_the_one_error_shape(tmp_path):
+    path = _write(tmp_path, "CCSDS_AEM_VERS = 3.0\n", "v3.aem")
+    with pytest.raises(EphemerisFormatError) as info:
+        read_aem(path)
+    err = info.value
+    assert (err.key, err.path, err.line) == ("CCSDS_AEM_VERS", str(path), 1)
+    assert str(err) == f"{path}, line 1: CCSDS_AEM_VERS: {err.reason}"
+    assert err.reason.startswith("version '3.0' is not supported")

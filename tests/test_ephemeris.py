@@ -9,7 +9,7 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.ephemeris import write_atomically
+from attitude.ephemeris import AtomicFiles, write_atomically
 
 
 @pytest.fixture
@@ -86,6 +86,56 @@ def test_atomic_write_leaves_old_file_intact_on_failure(eph, tmp_path):
         write_atomically(path, crash)
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["eph.nc"]
+
+
+def test_to_netcdf_crash_mid_write_leaves_no_file_and_keeps_the_old_one(eph, tmp_path,
+                                                                        monkeypatch):
+    """The netCDF writer fails after writing part of the file (the ephemeris writer's
+    own path through write_atomically, not a stand-in)."""
+    import xarray as xr
+
+    real = xr.Dataset.to_netcdf
+
+    def half_then_crash(self, path, *args, **kwargs):
+        real(self.isel(time=slice(0, 2)), path, *args, **kwargs)
+        raise KeyboardInterrupt("killed while writing")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", half_then_crash)
+    with pytest.raises(KeyboardInterrupt):
+        eph.to_netcdf(tmp_path / "new.nc")
+    assert list(tmp_path.iterdir()) == []
+    old = tmp_path / "old.nc"
+    old.write_bytes(b"previous ephemeris")
+    with pytest.raises(KeyboardInterrupt):
+        eph.to_netcdf(old)
+    assert old.read_bytes() == b"previous ephemeris"
+    assert list(tmp_path.iterdir()) == [old]
+
+
+def test_atomic_files_all_or_each_untouched(tmp_path):
+    """Several files: all renamed on success; on a crash after some are written, none is
+    replaced and no temporary file or folder is left."""
+    a, b = tmp_path / "a.txt", tmp_path / "sub" / "b.txt"
+    with AtomicFiles(a, b) as files:
+        files[a].write_text("A1")
+        files[b].write_text("B1")
+        assert not a.exists() and files[a].parent.parent == tmp_path
+    assert (a.read_text(), b.read_text()) == ("A1", "B1")
+    with pytest.raises(KeyboardInterrupt), AtomicFiles(a, b) as files:
+        files[a].write_text("A2")
+        raise KeyboardInterrupt
+    assert (a.read_text(), b.read_text()) == ("A1", "B1")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "sub"]
+    assert [p.name for p in (tmp_path / "sub").iterdir()] == ["b.txt"]
+    with pytest.raises(att.WriterError, match="nothing was written"), \
+            AtomicFiles(a, b) as files:
+        files[a].write_text("A3")                     # b never written: nothing renamed
+    assert a.read_text() == "A1" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "a.txt", "sub"]
+    with pytest.raises(att.WriterError, match="not a destination"), AtomicFiles(a) as files:
+        files[tmp_path / "c.txt"]
+    with pytest.raises(att.WriterError, match="not open"):
+        AtomicFiles(a)[a]
 
 
 def test_batch_dataset_has_a_body_dimension(tmp_path):

@@ -19,6 +19,20 @@ def test_input_errors_are_attitude_errors_and_value_errors(name):
     assert issubclass(cls, att.AttitudeError) and issubclass(cls, ValueError)
 
 
+def test_writer_error_is_an_attitude_error_and_a_runtime_error(tmp_path):
+    assert "WriterError" in att.__all__
+    assert issubclass(att.WriterError, att.AttitudeError)
+    assert issubclass(att.WriterError, RuntimeError)
+    from attitude.formats.streaming import EphemerisWriter
+    body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.0, 0.2])
+    writer = EphemerisWriter(tmp_path / "w.nc", body=body, epoch=state.epoch)
+    with pytest.raises(att.WriterError, match="not open"):
+        writer.append_arrays([0.0], [[0, 0, 0, 1]], [[0.1, 0.0, 0.2]])
+    with pytest.raises(att.WriterError, match="not open"):
+        writer.close()
+
+
 def test_warnings_are_attitude_warnings():
     for cls in (att.NearSeparatrixWarning, att.InvalidBodiesWarning):
         assert issubclass(cls, att.AttitudeWarning) and issubclass(cls, UserWarning)

@@ -134,7 +134,31 @@ def test_errors(eph, tmp_path):
         write_ck(att.Ephemeris(eph.dataset.assign_attrs(frame="LVLH")), tmp_path / "x.bc")
     with pytest.raises(ValueError, match="negative"):
         write_ck(eph, tmp_path / "x.bc", body_id=5)
+    for bad in ({"body_id": "spacecraft"}, {"body_id": -99.5}, {"instrument_id": []},
+                {"body_frame": 3}):
+        with pytest.raises(att.EphemerisFormatError):      # never a bare builtin error
+            write_ck(eph, tmp_path / "x.bc", **bad)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_crash_in_the_ck_writer_leaves_no_kernel_and_keeps_the_old_ones(eph, tmp_path,
+                                                                         monkeypatch):
+    """ckw03 fails after the SCLK, FK, LSK and meta-kernel are written: no kernel
+    appears, an existing set is untouched, and no temporary file is left."""
+    files = write_ck(eph, tmp_path / "eph.bc")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+
+    def crash(*args, **kwargs):
+        raise KeyboardInterrupt("killed while writing the CK")
+
+    monkeypatch.setattr(sp, "ckw03", crash)
+    with pytest.raises(KeyboardInterrupt):
+        write_ck(eph, tmp_path / "new" / "eph.bc")
+    assert list((tmp_path / "new").iterdir()) == []
+    with pytest.raises(KeyboardInterrupt):
+        write_ck(eph, files.ck)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([*before, "new"])
 
 
 def test_several_segments_and_a_tt_ephemeris(tmp_path, monkeypatch):

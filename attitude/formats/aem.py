@@ -74,7 +74,7 @@ from .. import quaternion as quat
 from ..body import RigidBody
 from ..ephemeris import Ephemeris, write_atomically
 from ..errors import AttitudeWarning, EphemerisFormatError
-from ..state import INERTIAL_FRAMES
+from ..state import INERTIAL_FRAMES, format_epoch
 
 __all__ = [
     "read_aem",
@@ -212,11 +212,12 @@ _CHUNK = 20_000                 # data lines formatted at a time when writing
 
 # --- errors -------------------------------------------------------------------------
 def _error(where: str, line: int | None, keyword: str, message: str) -> EphemerisFormatError:
-    """``"<file>, line <n>: <KEYWORD>: <message>"``, with the parts as attributes."""
+    """``"<file>, line <n>: <KEYWORD>: <message>"`` in the one error shape
+    (``key`` the keyword); ``path`` is the file and ``line`` its line (``keyword`` is
+    ``key`` under its AEM name)."""
     loc = f"{where}, line {line}" if line else where
-    err = EphemerisFormatError(f"{loc}: {keyword}: {message}" if loc else
-                               f"{keyword}: {message}")
-    err.path, err.line, err.keyword = where, line, keyword
+    err = EphemerisFormatError(message, key=keyword, path=loc or None)
+    err.path, err.line, err.keyword = where or None, line, keyword
     return err
 
 
@@ -334,87 +335,26 @@ def _euler_seq(value: str, where: str = "", line: int | None = None) -> str:
 
 def _spec(version: str, meta: _Block) -> _Spec:
     """Check a metadata block and work out how to read its data."""
-    where = meta.where
     for key in _META_MANDATORY[version]:
         if key not in meta.items:
-            raise _error(where, meta.stop or meta.start, key,
+            raise _error(meta.where, meta.stop or meta.start, key,
                          f"mandatory keyword missing from the metadata block that starts at "
                          f"line {meta.start}")
-    raw_type = meta.get("ATTITUDE_TYPE")
-    att_type = _norm_text(raw_type).replace("_/_", "/")
-    if att_type not in _TYPES[version]:
-        if version == "2.0" and att_type in _TYPES["1.0"]:
-            hint = (f"{att_type} is an AEM version 1.0 type (replaced in version 2.0 by "
-                    f"{att_type.replace('RATE', 'ANGVEL')} and .../DERIVATIVE)")
-        elif version == "1.0" and att_type in _TYPES["2.0"]:
-            hint = f"{att_type} exists only in AEM version 2.0"
-        else:
-            hint = f"use one of {', '.join(_TYPES[version])}"
-        raise _error(where, meta.line("ATTITUDE_TYPE"), "ATTITUDE_TYPE",
-                     f"{raw_type!r} is not an AEM version {version} attitude type: {hint}")
-
-    # Frames: one inertial (ours), one body.
-    frame_a = _norm_text(meta.get("REF_FRAME_A"))
-    frame_b = _norm_text(meta.get("REF_FRAME_B"))
-    a_inertial, b_inertial = frame_a in _INERTIAL, frame_b in _INERTIAL
-    if a_inertial == b_inertial:
-        what = "both" if a_inertial else "neither"
-        raise _error(where, meta.line("REF_FRAME_A"), "REF_FRAME_A",
-                     f"REF_FRAME_A = {frame_a} and REF_FRAME_B = {frame_b}: {what} of them is "
-                     f"an inertial frame ({', '.join(INERTIAL_FRAMES)}); an attitude ephemeris "
-                     "holds the rotation between an inertial frame and the body frame "
-                     "(local orbital or Earth-fixed frames need an orbit or Earth model)")
+    att_type = _attitude_type(version, meta)
+    frame_a, frame_b, a_inertial = _ref_frames(meta)
     inertial, body_frame = (frame_a, frame_b) if a_inertial else (frame_b, frame_a)
-
-    # Direction and component order (version 1 choices).
-    fields = _FIELDS[att_type]
-    a2b = True
-    if version == "1.0":
-        direction = _norm_text(meta.get("ATTITUDE_DIR"))
-        if direction not in ("A2B", "B2A"):
-            raise _error(where, meta.line("ATTITUDE_DIR"), "ATTITUDE_DIR",
-                         f"{meta.get('ATTITUDE_DIR')!r} must be A2B or B2A")
-        a2b = direction == "A2B"
-        if att_type.startswith("QUATERNION"):
-            if "QUATERNION_TYPE" not in meta.items:
-                raise _error(where, meta.stop or meta.start, "QUATERNION_TYPE",
-                             f"mandatory for ATTITUDE_TYPE = {att_type} in AEM version 1.0 "
-                             "(FIRST or LAST: where the scalar QC stands)")
-            qtype = _norm_text(meta.get("QUATERNION_TYPE"))
-            if qtype not in ("FIRST", "LAST"):
-                raise _error(where, meta.line("QUATERNION_TYPE"), "QUATERNION_TYPE",
-                             f"{meta.get('QUATERNION_TYPE')!r} must be FIRST or LAST")
-            if qtype == "FIRST":
-                rest = fields[4:]
-                if rest == _QDOT:
-                    rest = ("QC_DOT", "Q1_DOT", "Q2_DOT", "Q3_DOT")
-                fields = ("QC", "Q1", "Q2", "Q3") + rest
+    a2b, fields = _direction_and_fields(version, meta, att_type)
     euler_seq = None
     if att_type.startswith("EULER"):
-        if "EULER_ROT_SEQ" not in meta.items:
-            raise _error(where, meta.stop or meta.start, "EULER_ROT_SEQ",
-                         f"mandatory for ATTITUDE_TYPE = {att_type}: the angles mean nothing "
-                         "without their rotation sequence")
-        euler_seq = _euler_seq(meta.get("EULER_ROT_SEQ"), where, meta.line("EULER_ROT_SEQ"))
-    angvel_in_a = False
-    if att_type.endswith("/ANGVEL"):
-        if "ANGVEL_FRAME" not in meta.items:
-            raise _error(where, meta.stop or meta.start, "ANGVEL_FRAME",
-                         f"mandatory for ATTITUDE_TYPE = {att_type}: the frame of the angular "
-                         "velocity components")
-        value = _norm_text(meta.get("ANGVEL_FRAME"))
-        if value in ("REF_FRAME_A", frame_a):
-            angvel_in_a = True
-        elif value not in ("REF_FRAME_B", frame_b):
-            raise _error(where, meta.line("ANGVEL_FRAME"), "ANGVEL_FRAME",
-                         f"{meta.get('ANGVEL_FRAME')!r} must be REF_FRAME_A ({frame_a}) or "
-                         f"REF_FRAME_B ({frame_b}); components in a third frame cannot be "
-                         "converted without its orientation")
-
-    # Time system.
+        _require(meta, "EULER_ROT_SEQ", f"mandatory for ATTITUDE_TYPE = {att_type}: the "
+                 "angles mean nothing without their rotation sequence")
+        euler_seq = _euler_seq(meta.get("EULER_ROT_SEQ"), meta.where,
+                               meta.line("EULER_ROT_SEQ"))
+    angvel_in_a = att_type.endswith("/ANGVEL") and _angvel_frame_is_a(meta, att_type,
+                                                                       frame_a, frame_b)
     time_system = _norm_text(meta.get("TIME_SYSTEM"))
     if time_system not in AEM_TIME_SYSTEMS:
-        raise _error(where, meta.line("TIME_SYSTEM"), "TIME_SYSTEM",
+        raise _error(meta.where, meta.line("TIME_SYSTEM"), "TIME_SYSTEM",
                      f"{meta.get('TIME_SYSTEM')!r} is not supported: use one of "
                      f"{', '.join(AEM_TIME_SYSTEMS)} (mission, spacecraft-clock and sidereal "
                      "time systems need mission data to become a time scale)")
@@ -423,23 +363,135 @@ def _spec(version: str, meta: _Block) -> _Spec:
                  angvel_in_a, time_system, scale, offset)
 
 
+def _require(meta: _Block, key: str, message: str) -> None:
+    """A keyword that the other keywords make mandatory."""
+    if key not in meta.items:
+        raise _error(meta.where, meta.stop or meta.start, key, message)
+
+
+def _attitude_type(version: str, meta: _Block) -> str:
+    """``ATTITUDE_TYPE``, normalised, one of the version's types."""
+    raw_type = meta.get("ATTITUDE_TYPE")
+    att_type = _norm_text(raw_type).replace("_/_", "/")
+    if att_type in _TYPES[version]:
+        return att_type
+    if version == "2.0" and att_type in _TYPES["1.0"]:
+        hint = (f"{att_type} is an AEM version 1.0 type (replaced in version 2.0 by "
+                f"{att_type.replace('RATE', 'ANGVEL')} and .../DERIVATIVE)")
+    elif version == "1.0" and att_type in _TYPES["2.0"]:
+        hint = f"{att_type} exists only in AEM version 2.0"
+    else:
+        hint = f"use one of {', '.join(_TYPES[version])}"
+    raise _error(meta.where, meta.line("ATTITUDE_TYPE"), "ATTITUDE_TYPE",
+                 f"{raw_type!r} is not an AEM version {version} attitude type: {hint}")
+
+
+def _ref_frames(meta: _Block) -> tuple[str, str, bool]:
+    """``REF_FRAME_A``, ``REF_FRAME_B`` and whether A is the inertial one: exactly one of
+    them must be an inertial frame (ours), the other is the body frame."""
+    frame_a = _norm_text(meta.get("REF_FRAME_A"))
+    frame_b = _norm_text(meta.get("REF_FRAME_B"))
+    a_inertial, b_inertial = frame_a in _INERTIAL, frame_b in _INERTIAL
+    if a_inertial == b_inertial:
+        what = "both" if a_inertial else "neither"
+        raise _error(meta.where, meta.line("REF_FRAME_A"), "REF_FRAME_A",
+                     f"REF_FRAME_A = {frame_a} and REF_FRAME_B = {frame_b}: {what} of them is "
+                     f"an inertial frame ({', '.join(INERTIAL_FRAMES)}); an attitude ephemeris "
+                     "holds the rotation between an inertial frame and the body frame "
+                     "(local orbital or Earth-fixed frames need an orbit or Earth model)")
+    return frame_a, frame_b, a_inertial
+
+
+def _direction_and_fields(version: str, meta: _Block, att_type: str
+                          ) -> tuple[bool, tuple[str, ...]]:
+    """Whether the data rotate A to B, and the data items in file order (version 1
+    chooses both: ``ATTITUDE_DIR``, ``QUATERNION_TYPE``; version 2 fixes them)."""
+    fields = _FIELDS[att_type]
+    if version != "1.0":
+        return True, fields
+    direction = _norm_text(meta.get("ATTITUDE_DIR"))
+    if direction not in ("A2B", "B2A"):
+        raise _error(meta.where, meta.line("ATTITUDE_DIR"), "ATTITUDE_DIR",
+                     f"{meta.get('ATTITUDE_DIR')!r} must be A2B or B2A")
+    if att_type.startswith("QUATERNION"):
+        _require(meta, "QUATERNION_TYPE", f"mandatory for ATTITUDE_TYPE = {att_type} in AEM "
+                 "version 1.0 (FIRST or LAST: where the scalar QC stands)")
+        qtype = _norm_text(meta.get("QUATERNION_TYPE"))
+        if qtype not in ("FIRST", "LAST"):
+            raise _error(meta.where, meta.line("QUATERNION_TYPE"), "QUATERNION_TYPE",
+                         f"{meta.get('QUATERNION_TYPE')!r} must be FIRST or LAST")
+        if qtype == "FIRST":
+            rest = fields[4:]
+            if rest == _QDOT:
+                rest = ("QC_DOT", "Q1_DOT", "Q2_DOT", "Q3_DOT")
+            fields = ("QC", "Q1", "Q2", "Q3") + rest
+    return direction == "A2B", fields
+
+
+def _angvel_frame_is_a(meta: _Block, att_type: str, frame_a: str, frame_b: str) -> bool:
+    """Whether ``ANGVEL_FRAME`` names REF_FRAME_A (else REF_FRAME_B; no third frame)."""
+    _require(meta, "ANGVEL_FRAME", f"mandatory for ATTITUDE_TYPE = {att_type}: the frame of "
+             "the angular velocity components")
+    value = _norm_text(meta.get("ANGVEL_FRAME"))
+    if value in ("REF_FRAME_A", frame_a):
+        return True
+    if value in ("REF_FRAME_B", frame_b):
+        return False
+    raise _error(meta.where, meta.line("ANGVEL_FRAME"), "ANGVEL_FRAME",
+                 f"{meta.get('ANGVEL_FRAME')!r} must be REF_FRAME_A ({frame_a}) or "
+                 f"REF_FRAME_B ({frame_b}); components in a third frame cannot be "
+                 "converted without its orientation")
+
+
+# --- header and metadata blocks (both forms) -------------------------------------------
+def _block(where: str, version: str, section: str, start: int,
+           entries: Sequence[tuple[str, str, int]]) -> _Block:
+    """A header or metadata block from its ``(keyword, value, line)`` entries: every
+    keyword checked against the ``section`` of ``version``, none repeated or empty."""
+    allowed = (_HEADER_KEYS if section == "header" else _META_KEYS)[version]
+    block = _Block(where, start)
+    for key, value, line in entries:
+        block.add(key, value, line, allowed, version, section)
+    return block
+
+
+def _header(where: str, version: str, start: int, entries: Sequence[tuple[str, str, int]],
+            *, end: int, context: str) -> _Block:
+    """The message header, with its mandatory keywords (missing: an error at line
+    ``end``, explained by ``context``)."""
+    header = _block(where, version, "header", start, entries)
+    for key in _HEADER_MANDATORY:
+        if key not in header.items:
+            raise _error(where, end, key, f"mandatory header keyword missing {context}")
+    return header
+
+
+def _metadata(where: str, version: str, start: int, entries: Sequence[tuple[str, str, int]],
+              stop: int = 0) -> tuple[_Block, _Spec]:
+    """A segment's metadata block and how to read its data (:func:`_spec`)."""
+    meta = _block(where, version, "metadata", start, entries)
+    meta.stop = stop
+    return meta, _spec(version, meta)
+
+
 # --- KVN ----------------------------------------------------------------------------
-def _parse_kvn(text: str, where: str) -> _Message:
-    lines = text.splitlines()
-    n_lines = len(lines)
-    it = ((i, s.strip()) for i, s in enumerate(lines, 1))
-    it = ((i, s) for i, s in it if s)
+def _is_comment(s: str) -> bool:
+    return s.startswith("COMMENT") and (len(s) == 7 or s[7].isspace())
 
-    def kvn(i: int, s: str) -> tuple[str, str]:
-        if s.startswith("COMMENT") and (len(s) == 7 or s[7].isspace()):
-            return "COMMENT", s[8:]
-        m = _KVN_RE.match(s)
-        if not m:
-            raise _error(where, i, s.split()[0][:40],
-                         "expected 'KEYWORD = value' (or a block delimiter)")
-        return m.group(1).upper(), m.group(2)
 
-    first = next(it, None)
+def _kvn_pair(where: str, i: int, s: str) -> tuple[str, str]:
+    """``(KEYWORD, value)`` of a KVN line (``COMMENT`` takes the rest of the line)."""
+    if _is_comment(s):
+        return "COMMENT", s[8:]
+    m = _KVN_RE.match(s)
+    if not m:
+        raise _error(where, i, s.split()[0][:40],
+                     "expected 'KEYWORD = value' (or a block delimiter)")
+    return m.group(1).upper(), m.group(2)
+
+
+def _kvn_version(first: tuple[int, str] | None, where: str) -> str:
+    """The version from the first non-blank line, which must be ``CCSDS_AEM_VERS``."""
     if first is None:
         raise _error(where, None, "CCSDS_AEM_VERS", "the file is empty")
     i, s = first
@@ -450,71 +502,119 @@ def _parse_kvn(text: str, where: str) -> _Message:
                  "message" if other else f"found {s[:40]!r}")
         raise _error(where, i, "CCSDS_AEM_VERS",
                      f"the first non-blank line must be 'CCSDS_AEM_VERS = 2.0': {found}")
-    version = _version(where, i, m.group(2))
-    header = _Block(where, i)
-    segments: list[_Segment] = []
-    state, meta, data_start, spec = "header", None, 0, None
-    rows: list[tuple[int, list[str]]] = []
-    for i, s in it:
-        if state == "data":
-            if s == "DATA_STOP":
-                segments.append(_kvn_segment(where, meta, spec, data_start, rows))
-                state, rows = "body", []
-            elif s.startswith("COMMENT") and (len(s) == 7 or s[7].isspace()):
-                continue
-            elif "=" in s or s in ("META_START", "META_STOP", "DATA_START"):
-                raise _error(where, i, s.split("=")[0].strip(),
-                             f"expected a data line or DATA_STOP: the data block opened by "
-                             f"DATA_START at line {data_start} is not closed")
-            else:
-                rows.append((i, s.split()))
-            continue
-        if s == "META_START":
-            if state == "header":
-                for key in _HEADER_MANDATORY:
-                    if key not in header.items:
-                        raise _error(where, i, key, "mandatory header keyword missing "
-                                     "(the header ends at this META_START)")
-                header.stop = i
-            elif state not in ("body",):
-                raise _error(where, i, "META_START",
-                             f"unexpected: the metadata block that starts at line "
-                             f"{meta.start} has no DATA_START/DATA_STOP")
-            state, meta = "meta", _Block(where, i)
-        elif s == "META_STOP":
-            if state != "meta":
-                raise _error(where, i, "META_STOP", "without a META_START")
-            meta.stop, state = i, "after_meta"
-            spec = _spec(version, meta)
-        elif s == "DATA_START":
-            if state != "after_meta":
-                raise _error(where, i, "DATA_START", "must follow a metadata block "
-                             "(META_START ... META_STOP)")
-            state, data_start = "data", i
-        elif s == "DATA_STOP":
-            raise _error(where, i, "DATA_STOP", "without a DATA_START")
+    return _version(where, i, m.group(2))
+
+
+class _KvnReader:
+    """The KVN structure, line by line: header, then segments of a metadata block
+    (``META_START`` ... ``META_STOP``) and a data block (``DATA_START`` ...
+    ``DATA_STOP``).  ``state`` is where the reader is: ``header``, ``meta``,
+    ``after_meta`` (between ``META_STOP`` and ``DATA_START``), ``data`` or ``body``
+    (between segments)."""
+
+    def __init__(self, where: str, version: str, start: int):
+        self.where, self.version, self.start = where, version, start
+        self.state = "header"
+        self.entries: list[tuple[str, str, int]] = []   # of the open header/metadata
+        self.header: _Block | None = None
+        self.meta_start = self.data_start = 0
+        self.meta: _Block | None = None
+        self.spec: _Spec | None = None
+        self.rows: list[tuple[int, list[str]]] = []
+        self.segments: list[_Segment] = []
+
+    def feed(self, i: int, s: str) -> None:
+        if self.state == "data":
+            self._data_line(i, s)
+            return
+        delimiter = {"META_START": self._meta_start, "META_STOP": self._meta_stop,
+                     "DATA_START": self._data_start, "DATA_STOP": self._data_stop}.get(s)
+        if delimiter is not None:
+            delimiter(i)
         else:
-            if state == "after_meta" and s[:1].isdigit():
-                raise _error(where, i, "DATA_START", "data line without DATA_START: the data "
-                             "of a segment sit between DATA_START and DATA_STOP (4.2.4.1)")
-            key, value = kvn(i, s)
-            if state == "header":
-                header.add(key, value, i, _HEADER_KEYS[version], version, "header")
-            elif state == "meta":
-                meta.add(key, value, i, _META_KEYS[version], version, "metadata")
-            elif key != "COMMENT":
-                expected = {"after_meta": "DATA_START", "body": "META_START"}[state]
-                raise _error(where, i, key, f"unexpected here: expected {expected}")
-    if state == "data":
-        raise _error(where, n_lines, "DATA_STOP",
-                     f"missing at the end of the file (DATA_START at line {data_start})")
-    if state in ("meta", "after_meta"):
-        raise _error(where, n_lines, "DATA_START" if state == "after_meta" else "META_STOP",
-                     f"missing at the end of the file (META_START at line {meta.start})")
-    if not segments:
-        raise _error(where, n_lines, "META_START",
-                     "the file has no segment (META_START ... DATA_STOP): no attitude data")
-    return _Message(where, "KVN", version, header, segments)
+            self._keyword(i, s)
+
+    def _meta_start(self, i: int) -> None:
+        if self.state == "header":
+            self.header = _header(self.where, self.version, self.start, self.entries, end=i,
+                                  context="(the header ends at this META_START)")
+            self.header.stop = i
+        elif self.state != "body":
+            raise _error(self.where, i, "META_START",
+                         f"unexpected: the metadata block that starts at line "
+                         f"{self.meta_start} has no DATA_START/DATA_STOP")
+        self.state, self.meta_start, self.entries = "meta", i, []
+
+    def _meta_stop(self, i: int) -> None:
+        if self.state != "meta":
+            raise _error(self.where, i, "META_STOP", "without a META_START")
+        self.meta, self.spec = _metadata(self.where, self.version, self.meta_start,
+                                         self.entries, stop=i)
+        self.state = "after_meta"
+
+    def _data_start(self, i: int) -> None:
+        if self.state != "after_meta":
+            raise _error(self.where, i, "DATA_START", "must follow a metadata block "
+                         "(META_START ... META_STOP)")
+        self.state, self.data_start, self.rows = "data", i, []
+
+    def _data_stop(self, i: int) -> None:
+        raise _error(self.where, i, "DATA_STOP", "without a DATA_START")
+
+    def _keyword(self, i: int, s: str) -> None:
+        if self.state == "after_meta" and s[:1].isdigit():
+            raise _error(self.where, i, "DATA_START", "data line without DATA_START: the "
+                         "data of a segment sit between DATA_START and DATA_STOP (4.2.4.1)")
+        key, value = _kvn_pair(self.where, i, s)
+        if self.state in ("header", "meta"):
+            self.entries.append((key, value, i))
+        elif key != "COMMENT":
+            expected = {"after_meta": "DATA_START", "body": "META_START"}[self.state]
+            raise _error(self.where, i, key, f"unexpected here: expected {expected}")
+
+    def _data_line(self, i: int, s: str) -> None:
+        if s == "DATA_STOP":
+            self.segments.append(_kvn_segment(self.where, self.meta, self.spec,
+                                              self.data_start, self.rows))
+            self.state = "body"
+        elif _is_comment(s):
+            return
+        elif "=" in s or s in ("META_START", "META_STOP", "DATA_START"):
+            raise _error(self.where, i, s.split("=")[0].strip(),
+                         f"expected a data line or DATA_STOP: the data block opened by "
+                         f"DATA_START at line {self.data_start} is not closed")
+        else:
+            self.rows.append((i, s.split()))
+
+    def finish(self, n_lines: int) -> _Message:
+        """The message, once every line is fed; errors for unclosed blocks."""
+        where, state = self.where, self.state
+        if state in ("header", "meta"):     # the keywords first: as if checked on the way
+            _block(where, self.version, "header" if state == "header" else "metadata",
+                   self.start, self.entries)
+        if state == "data":
+            raise _error(where, n_lines, "DATA_STOP",
+                         f"missing at the end of the file (DATA_START at line "
+                         f"{self.data_start})")
+        if state in ("meta", "after_meta"):
+            raise _error(where, n_lines, "DATA_START" if state == "after_meta" else
+                         "META_STOP", f"missing at the end of the file (META_START at line "
+                         f"{self.meta_start})")
+        if not self.segments:
+            raise _error(where, n_lines, "META_START", "the file has no segment "
+                         "(META_START ... DATA_STOP): no attitude data")
+        return _Message(where, "KVN", self.version, self.header, self.segments)
+
+
+def _parse_kvn(text: str, where: str) -> _Message:
+    lines = text.splitlines()
+    it = ((i, s.strip()) for i, s in enumerate(lines, 1))
+    it = ((i, s) for i, s in it if s)
+    first = next(it, None)
+    reader = _KvnReader(where, _kvn_version(first, where), first[0])
+    for i, s in it:
+        reader.feed(i, s)
+    return reader.finish(len(lines))
 
 
 def _kvn_segment(where: str, meta: _Block, spec: _Spec, data_start: int,
@@ -633,13 +733,8 @@ def _parse_xml(data: bytes, where: str) -> _Message:
     for tag in ("header", "body"):
         if tag not in parts:
             raise _error(where, root.line, tag, f"the <aem> element has no <{tag}>")
-    header = _Block(where, parts["header"].line)
-    for c in parts["header"].children:
-        header.add(c.tag, c.text, c.line, _HEADER_KEYS[version], version, "header")
-    for key in _HEADER_MANDATORY:
-        if key not in header.items:
-            raise _error(where, parts["header"].line, key,
-                         "mandatory header keyword missing from <header>")
+    header = _header(where, version, parts["header"].line, _xml_entries(parts["header"]),
+                     end=parts["header"].line, context="from <header>")
     segments = []
     for seg in parts["body"].children:
         if seg.tag != "segment":
@@ -648,14 +743,17 @@ def _parse_xml(data: bytes, where: str) -> _Message:
         for tag in ("metadata", "data"):
             if tag not in sparts:
                 raise _error(where, seg.line, tag, f"the <segment> has no <{tag}>")
-        meta = _Block(where, sparts["metadata"].line)
-        for c in sparts["metadata"].children:
-            meta.add(c.tag, c.text, c.line, _META_KEYS[version], version, "metadata")
-        spec = _spec(version, meta)
+        meta, spec = _metadata(where, version, sparts["metadata"].line,
+                               _xml_entries(sparts["metadata"]))
         segments.append(_xml_segment(where, meta, spec, sparts["data"]))
     if not segments:
         raise _error(where, parts["body"].line, "segment", "the <body> has no <segment>")
     return _Message(where, "XML", version, header, segments)
+
+
+def _xml_entries(node: _Node) -> list[tuple[str, str, int]]:
+    """``(keyword, value, line)`` of the child elements of ``<header>``/``<metadata>``."""
+    return [(c.tag, c.text, c.line) for c in node.children]
 
 
 def _xml_leaves(node: _Node) -> Iterator[_Node]:
@@ -976,53 +1074,90 @@ def read_aem(path: str | PathLike, *, body: RigidBody | None = None,
     if angular_velocity not in ("file", "estimate"):
         raise EphemerisFormatError(
             f"angular_velocity={angular_velocity!r}: use 'file' (NaN where the file has no "
-            "rates) or 'estimate' (from neighbouring attitudes)")
+            "rates) or 'estimate' (from neighbouring attitudes)", key="angular_velocity")
     path = Path(path)
     msg = _load(path)
-    where = msg.where
-    chosen = list(range(len(msg.segments)))
-    if segment is not None:
-        wanted = [segment] if isinstance(segment, (int, np.integer)) else list(segment)
-        try:
-            chosen = [chosen[int(k)] for k in wanted]
-        except IndexError:
-            raise EphemerisFormatError(
-                f"{where}: segment={segment!r}, but the file has {len(msg.segments)} "
-                "segment(s) (numbered from 0)") from None
-        if not chosen:
-            raise EphemerisFormatError(f"{where}: segment=[] selects no data")
+    chosen = [msg.segments[k] for k in _chosen_segments(msg, segment)]
+    for seg in chosen[1:]:
+        _check_same_frames(seg, chosen[0], msg.where)
+    parts = _segment_samples(chosen, [_chosen_index(msg, seg) for seg in chosen],
+                             msg.where, angular_velocity)
+    ds = _aem_ephemeris(msg, chosen[0], parts, body, path.name).dataset
+    ds["aem_segment"] = ("time", np.concatenate([p.index for p in parts]), {
+        "long_name": "index of the CCSDS AEM segment of each sample (no interpolation "
+                     "across a change of segment)", "units": "1"})
+    if body is None:
+        _mark_unknown_mass_properties(ds)
+    return Ephemeris(ds)
 
-    first = msg.segments[chosen[0]]
-    seconds, quats, rates, seg_index, sources, types = [], [], [], [], [], []
-    previous = whole0 = frac0 = None
-    for k in chosen:
-        seg = msg.segments[k]
+
+def _chosen_segments(msg: _Message, segment) -> list[int]:
+    """Indices of the segments ``segment=`` selects (all by default)."""
+    everything = list(range(len(msg.segments)))
+    if segment is None:
+        return everything
+    wanted = [segment] if isinstance(segment, (int, np.integer)) else list(segment)
+    try:
+        chosen = [everything[int(k)] for k in wanted]
+    except IndexError:
+        raise EphemerisFormatError(
+            f"{msg.where}: segment={segment!r}, but the file has {len(msg.segments)} "
+            "segment(s) (numbered from 0)", key="segment") from None
+    if not chosen:
+        raise EphemerisFormatError(f"{msg.where}: segment=[] selects no data", key="segment")
+    return chosen
+
+
+def _chosen_index(msg: _Message, seg: _Segment) -> int:
+    return next(k for k, s in enumerate(msg.segments) if s is seg)
+
+
+def _check_same_frames(seg: _Segment, first: _Segment, where: str) -> None:
+    """Segments are concatenated only when they share frames and time system."""
+    spec = seg.spec
+    for attr, what in (("inertial", "inertial frame"), ("body_frame", "body frame"),
+                       ("time_system", "TIME_SYSTEM")):
+        if getattr(spec, attr) != getattr(first.spec, attr):
+            key = ("TIME_SYSTEM" if attr == "time_system" else
+                   "REF_FRAME_A" if (attr == "inertial") == spec.inertial_is_a
+                   else "REF_FRAME_B")
+            raise _error(where, seg.meta.line(key), key,
+                         f"{what} {getattr(spec, attr)} differs from "
+                         f"{getattr(first.spec, attr)} in the segment at line "
+                         f"{first.meta.start}: segments are concatenated only when they "
+                         "share frames and time system; read them one at a time with "
+                         "segment=")
+
+
+@dataclass
+class _Samples:
+    """The samples of one segment: seconds since the first epoch of the file, body ->
+    inertial quaternions, body rates (rad/s), where the rates come from."""
+
+    seconds: np.ndarray
+    quaternion: np.ndarray
+    omega: np.ndarray
+    index: np.ndarray               # the segment number of each sample
+    rates: str                      # "file", "estimate" or "none"
+    attitude_type: str
+    epoch: Time                     # the first time tag of the file (9 decimals)
+
+
+def _segment_samples(segments: list[_Segment], numbers: list[int], where: str,
+                     angular_velocity: str) -> list[_Samples]:
+    """Times, attitudes and rates of each segment, with the checks of time order within
+    a segment and from one segment to the next."""
+    out: list[_Samples] = []
+    whole0 = frac0 = epoch = previous = None
+    for seg, k in zip(segments, numbers):
         spec = seg.spec
-        for attr, what in (("inertial", "inertial frame"), ("body_frame", "body frame"),
-                           ("time_system", "TIME_SYSTEM")):
-            if getattr(spec, attr) != getattr(first.spec, attr):
-                key = ("TIME_SYSTEM" if attr == "time_system" else
-                       "REF_FRAME_A" if (attr == "inertial") == spec.inertial_is_a
-                       else "REF_FRAME_B")
-                raise _error(where, seg.meta.line(key), key,
-                             f"{what} {getattr(spec, attr)} differs from "
-                             f"{getattr(first.spec, attr)} in the segment at line "
-                             f"{first.meta.start}: segments are concatenated only when they "
-                             "share frames and time system; read them one at a time with "
-                             "segment=")
         ep = _parse_times(seg.epochs, seg.lines, spec, where)
         if whole0 is None:
             whole0, frac0 = ep.whole[0], float("0." + ep.digits[0][:9]) if ep.digits[0] else 0.0
+            # the epoch: the first time tag, its fraction cut to 9 decimals
+            epoch = whole0 + TimeDelta(frac0, format="sec")
         sec = ep.seconds_since(whole0, frac0)
-        dt = np.diff(sec)
-        back = np.flatnonzero(~(dt > 0))
-        if back.size:
-            i = back[0] + 1
-            what = "repeats" if dt[i - 1] == 0 else "goes back from"
-            raise _error(where, seg.lines[i], "EPOCH",
-                         f"time {what} the previous data line (line {seg.lines[i - 1]}, "
-                         f"{seg.epochs[i - 1]} -> {seg.epochs[i]}): epochs must increase "
-                         "within a segment (4.2.4.8.1)")
+        _check_increasing(seg, sec, where)
         if previous is not None and sec[0] < previous[0]:
             raise _error(where, seg.lines[0], "EPOCH",
                          f"time goes backwards: this segment starts at {seg.epochs[0]}, before "
@@ -1035,23 +1170,35 @@ def read_aem(path: str | PathLike, *, body: RigidBody | None = None,
             _warn(where, seg.meta.line("ATTITUDE_TYPE"), "ATTITUDE_TYPE",
                   f"{spec.attitude_type}: the version 1.0 rate items are ambiguous (angular "
                   "velocity or Euler angle rates) and are not used")
-        seconds.append(sec)
-        quats.append(q)
-        rates.append(w)
-        seg_index.append(np.full(len(sec), k, dtype=np.int32))
-        sources.append("file" if has_rates else angular_velocity if angular_velocity ==
-                       "estimate" else "none")
-        types.append(spec.attitude_type)
+        rates = "file" if has_rates else "estimate" if angular_velocity == "estimate" else "none"
+        out.append(_Samples(sec, q, w, np.full(len(sec), k, dtype=np.int32), rates,
+                            spec.attitude_type, epoch))
+    for part in out:
+        if part.rates == "estimate":
+            part.omega = _estimate_omega(part.quaternion, part.seconds)
+    return out
 
-    spec = first.spec
-    # epoch: the first time tag, its fraction cut to the 9 decimals of the attribute
-    epoch = whole0 + TimeDelta(frac0, format="sec")
-    for j, source in enumerate(sources):
-        if source == "estimate":
-            rates[j] = _estimate_omega(quats[j], seconds[j])
-    source_text = {"file": "from the AEM data lines",
-                   "estimate": "estimated from neighbouring attitudes (finite differences)",
-                   "none": "not in the AEM (NaN)"}
+
+def _check_increasing(seg: _Segment, sec: np.ndarray, where: str) -> None:
+    dt = np.diff(sec)
+    back = np.flatnonzero(~(dt > 0))
+    if back.size:
+        i = back[0] + 1
+        what = "repeats" if dt[i - 1] == 0 else "goes back from"
+        raise _error(where, seg.lines[i], "EPOCH",
+                     f"time {what} the previous data line (line {seg.lines[i - 1]}, "
+                     f"{seg.epochs[i - 1]} -> {seg.epochs[i]}): epochs must increase "
+                     "within a segment (4.2.4.8.1)")
+
+
+_RATE_SOURCES = {"file": "from the AEM data lines",
+                 "estimate": "estimated from neighbouring attitudes (finite differences)",
+                 "none": "not in the AEM (NaN)"}
+
+
+def _aem_attrs(msg: _Message, first: _Segment, parts: list[_Samples],
+               body: RigidBody | None) -> dict:
+    """Global attributes that keep the AEM header and metadata."""
     attrs = {
         "aem_version": msg.version,
         "aem_form": msg.form,
@@ -1059,11 +1206,12 @@ def read_aem(path: str | PathLike, *, body: RigidBody | None = None,
         "aem_object_id": first.meta.get("OBJECT_ID"),
         "aem_originator": msg.header.get("ORIGINATOR"),
         "aem_creation_date": msg.header.get("CREATION_DATE"),
-        "aem_time_system": spec.time_system,
-        "aem_attitude_type": ", ".join(dict.fromkeys(types)),
-        "body_frame": spec.body_frame,
+        "aem_time_system": first.spec.time_system,
+        "aem_attitude_type": ", ".join(dict.fromkeys(p.attitude_type for p in parts)),
+        "body_frame": first.spec.body_frame,
         "inertia_known": int(body is not None),
-        "angular_velocity_source": "; ".join(source_text[s] for s in dict.fromkeys(sources)),
+        "angular_velocity_source": "; ".join(
+            _RATE_SOURCES[s] for s in dict.fromkeys(p.rates for p in parts)),
     }
     if first.meta.get("CENTER_NAME"):
         attrs["aem_center_name"] = first.meta.get("CENTER_NAME")
@@ -1072,28 +1220,33 @@ def read_aem(path: str | PathLike, *, body: RigidBody | None = None,
     comments = msg.header.comments + first.meta.comments
     if comments:
         attrs["comment"] = "\n".join(c.strip() for c in comments)
+    return attrs
+
+
+def _aem_ephemeris(msg: _Message, first: _Segment, parts: list[_Samples],
+                   body: RigidBody | None, file_name: str) -> Ephemeris:
+    attrs = _aem_attrs(msg, first, parts, body)
     name = first.meta.get("OBJECT_NAME")
-    eph = Ephemeris.from_arrays(
-        np.concatenate(seconds), np.concatenate(quats), np.concatenate(rates),
+    return Ephemeris.from_arrays(
+        np.concatenate([p.seconds for p in parts]),
+        np.concatenate([p.quaternion for p in parts]),
+        np.concatenate([p.omega for p in parts]),
         body=body if body is not None else _PLACEHOLDER,
-        epoch=epoch, frame=spec.inertial,
+        epoch=parts[0].epoch, frame=first.spec.inertial,
         title=f"attitude ephemeris of {name} (CCSDS AEM)",
-        source=(f"CCSDS AEM {msg.version} ({msg.form}) {path.name}, ORIGINATOR "
+        source=(f"CCSDS AEM {msg.version} ({msg.form}) {file_name}, ORIGINATOR "
                 f"{attrs['aem_originator']}, CREATION_DATE {attrs['aem_creation_date']}"),
         extra_attrs=attrs)
-    ds = eph.dataset
-    ds["aem_segment"] = ("time", np.concatenate(seg_index), {
-        "long_name": "index of the CCSDS AEM segment of each sample (no interpolation "
-                     "across a change of segment)", "units": "1"})
-    if body is None:
-        for key in ("inertia", "principal_moments"):
-            ds.attrs.pop(key, None)
-        note = "unknown: the AEM carries no mass properties (read_aem(..., body=...))"
-        ds["angular_momentum"].values[:] = np.nan
-        ds["kinetic_energy"].values[:] = np.nan
-        ds["angular_momentum"].attrs["comment"] = note
-        ds["kinetic_energy"].attrs["comment"] = note
-    return Ephemeris(ds)
+
+
+def _mark_unknown_mass_properties(ds) -> None:
+    """No body given: no inertia attributes, NaN angular momentum and energy."""
+    for key in ("inertia", "principal_moments"):
+        ds.attrs.pop(key, None)
+    note = "unknown: the AEM carries no mass properties (read_aem(..., body=...))"
+    for name in ("angular_momentum", "kinetic_energy"):
+        ds[name].values[:] = np.nan
+        ds[name].attrs["comment"] = note
 
 
 _PLACEHOLDER = RigidBody.from_principal_moments([1.0, 1.0, 1.0])
@@ -1109,12 +1262,6 @@ def _check_span(seg: _Segment, ep: _Epochs, where: str) -> None:
             _warn(where, seg.meta.line(key), key,
                   f"{seg.meta.get(key)} does not cover the data (epoch {seg.epochs[idx]} at "
                   f"line {seg.lines[idx]})")
-
-
-def _isot9(t: Time) -> str:
-    t = t.copy()
-    t.precision = 9
-    return t.isot
 
 
 # --- writing ------------------------------------------------------------------------
@@ -1326,21 +1473,82 @@ def write_aem(ephemeris: Ephemeris, path: str | PathLike, *, form: str | None = 
     >>> float(abs(back.dataset.quaternion.values - eph.dataset.quaternion.values).max())
     0.0
     """
-    if not isinstance(ephemeris, Ephemeris):
-        raise EphemerisFormatError(
-            f"expected an attitude.Ephemeris, got {type(ephemeris).__name__}")
-    eph = ephemeris
-    if eph.is_batch:
-        raise EphemerisFormatError(
-            f"a batch ephemeris holds {eph.dataset.sizes['body']} bodies and an AEM one "
-            "object: write one at a time (Ephemeris(eph.dataset.isel(body=k)))")
-    if len(eph) == 0:
-        raise EphemerisFormatError("the ephemeris has no samples")
+    eph = _single_ephemeris(ephemeris)
     path = Path(path)
     form = _write_form(path, form)
     ds = eph.dataset
     q = np.asarray(ds["quaternion"].values, dtype=float)
     w = np.asarray(ds["angular_velocity"].values, dtype=float)
+    kind = _write_kind(attitude_type, eph, q, w)
+    seq = _euler_seq(euler_rot_seq) if kind.startswith("EULER") else None
+    frame_a, frame_b = _frames(eph, ref_frame_a, ref_frame_b)
+    angvel_in_a = _angvel_in_a(angvel_frame, frame_a, frame_b)
+    ts, times = _write_times(eph, time_system)
+    if (interpolation_method is None) != (interpolation_degree is None):
+        raise EphemerisFormatError(
+            "give interpolation_method and interpolation_degree together (4.2.3)")
+    attrs = ds.attrs
+    object_name = _text(object_name or attrs.get("aem_object_name") or attrs.get("body_name")
+                        or "UNKNOWN", "OBJECT_NAME")
+    object_id = _text(object_id or attrs.get("aem_object_id") or "UNKNOWN", "OBJECT_ID")
+    center = center_name or attrs.get("aem_center_name")
+    header = [("CREATION_DATE", datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S")),
+              ("ORIGINATOR", _text(originator, "ORIGINATOR"))]
+    if message_id is not None:
+        header.append(("MESSAGE_ID", _text(message_id, "MESSAGE_ID")))
+    common = [("OBJECT_NAME", object_name), ("OBJECT_ID", object_id)]
+    if center:
+        common.append(("CENTER_NAME", _text(center, "CENTER_NAME")))
+    common += [("REF_FRAME_A", frame_a), ("REF_FRAME_B", frame_b), ("TIME_SYSTEM", ts)]
+    tail = [("ATTITUDE_TYPE", kind)]
+    if seq:
+        tail.append(("EULER_ROT_SEQ", seq))
+    if kind.endswith("/ANGVEL"):
+        tail.append(("ANGVEL_FRAME", frame_a if angvel_in_a else frame_b))
+    if interpolation_method is not None:
+        tail += [("INTERPOLATION_METHOD", _text(interpolation_method, "INTERPOLATION_METHOD")),
+                 ("INTERPOLATION_DEGREE", _degree(interpolation_degree))]
+    out = _Output(
+        kind=kind, header_comments=[_text_comment(c) for c in comments], header=header,
+        provenance=(f"attitude: quaternion = rotation from REF_FRAME_A ({frame_a}) to "
+                    f"REF_FRAME_B ({frame_b}), scalar QC last"),
+        segments=[(common + [("START_TIME", format_epoch(times[a])),
+                             ("STOP_TIME", format_epoch(times[b - 1]))] + tail, a, b)
+                  for a, b in _segment_bounds(eph)],
+        times=times, values=_state_values(kind, q, w, seq, angvel_in_a))
+    writer = _write_kvn if form == "kvn" else _write_xml
+    return write_atomically(path, lambda tmp: writer(tmp, out))
+
+
+def _degree(value) -> str:
+    """INTERPOLATION_DEGREE as text: a non-negative integer."""
+    try:
+        degree = int(value)
+    except (TypeError, ValueError):
+        degree = -1
+    if degree < 0 or degree != value:
+        raise EphemerisFormatError(f"interpolation_degree={value!r}: give a non-negative "
+                                   "integer", key="INTERPOLATION_DEGREE")
+    return str(degree)
+
+
+def _single_ephemeris(ephemeris) -> Ephemeris:
+    """The ephemeris, if it is one body with samples."""
+    if not isinstance(ephemeris, Ephemeris):
+        raise EphemerisFormatError(
+            f"expected an attitude.Ephemeris, got {type(ephemeris).__name__}")
+    if ephemeris.is_batch:
+        raise EphemerisFormatError(
+            f"a batch ephemeris holds {ephemeris.dataset.sizes['body']} bodies and an AEM one "
+            "object: write one at a time (Ephemeris(eph.dataset.isel(body=k)))")
+    if len(ephemeris) == 0:
+        raise EphemerisFormatError("the ephemeris has no samples")
+    return ephemeris
+
+
+def _write_kind(attitude_type: str | None, eph: Ephemeris, q: np.ndarray,
+                w: np.ndarray) -> str:
+    """The ATTITUDE_TYPE to write, checked against the data it needs."""
     if attitude_type is None:
         kind = "QUATERNION/ANGVEL" if np.all(np.isfinite(w)) else "QUATERNION"
     else:
@@ -1356,34 +1564,25 @@ def write_aem(ephemeris: Ephemeris, path: str | PathLike, *, form: str | None = 
             f"ATTITUDE_TYPE = {kind} needs the angular velocity, which is NaN at sample {i} "
             "(t = {:.9g} s): write attitude_type='QUATERNION' or 'EULER_ANGLE', or estimate "
             "the rates first".format(eph.time[i]))
-    seq = _euler_seq(euler_rot_seq) if kind.startswith("EULER") else None
-    frame_a, frame_b = _frames(eph, ref_frame_a, ref_frame_b)
+    return kind
+
+
+def _angvel_in_a(angvel_frame: str, frame_a: str, frame_b: str) -> bool:
+    """Whether the ``angvel_frame=`` option names REF_FRAME_A (else REF_FRAME_B)."""
     which = _norm_text(str(angvel_frame))
     if which in ("REF_FRAME_A", "A", frame_a):
-        angvel_in_a = True
-    elif which in ("REF_FRAME_B", "B", frame_b):
-        angvel_in_a = False
-    else:
-        raise EphemerisFormatError(
-            f"angvel_frame={angvel_frame!r}: use REF_FRAME_A ({frame_a}) or REF_FRAME_B "
-            f"({frame_b})")
-    ts, times = _write_times(eph, time_system)
-    if (interpolation_method is None) != (interpolation_degree is None):
-        raise EphemerisFormatError(
-            "give interpolation_method and interpolation_degree together (4.2.3)")
+        return True
+    if which in ("REF_FRAME_B", "B", frame_b):
+        return False
+    raise EphemerisFormatError(
+        f"angvel_frame={angvel_frame!r}: use REF_FRAME_A ({frame_a}) or REF_FRAME_B "
+        f"({frame_b})")
 
-    attrs = ds.attrs
-    object_name = _text(object_name or attrs.get("aem_object_name") or attrs.get("body_name")
-                        or "UNKNOWN", "OBJECT_NAME")
-    object_id = _text(object_id or attrs.get("aem_object_id") or "UNKNOWN", "OBJECT_ID")
-    center = center_name or attrs.get("aem_center_name")
-    header = [("CREATION_DATE", datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S")),
-              ("ORIGINATOR", _text(originator, "ORIGINATOR"))]
-    if message_id is not None:
-        header.append(("MESSAGE_ID", _text(message_id, "MESSAGE_ID")))
-    header_comments = [_text_comment(c) for c in comments]
 
-    # Segments: runs of equal aem_segment, each with strictly increasing time.
+def _segment_bounds(eph: Ephemeris) -> list[tuple[int, int]]:
+    """``(start, stop)`` sample ranges of the segments: runs of equal ``aem_segment``,
+    each with strictly increasing time."""
+    ds = eph.dataset
     seg = (np.asarray(ds["aem_segment"].values) if "aem_segment" in ds
            else np.zeros(len(eph), dtype=int))
     cuts = np.flatnonzero(np.diff(seg) != 0) + 1
@@ -1394,102 +1593,91 @@ def write_aem(ephemeris: Ephemeris, path: str | PathLike, *, form: str | None = 
             raise EphemerisFormatError(
                 f"time does not increase at sample {a + back[0] + 1} (t = "
                 f"{eph.time[a + back[0] + 1]:.9g} s): an AEM segment needs increasing epochs")
+    return bounds
 
-    values = _state_values(kind, q, w, seq, angvel_in_a)
-    fields = _FIELDS[kind]
-    provenance = (f"attitude: quaternion = rotation from REF_FRAME_A ({frame_a}) to "
-                  f"REF_FRAME_B ({frame_b}), scalar QC last")
-    segments = []
-    for a, b in bounds:
-        meta = [("OBJECT_NAME", object_name), ("OBJECT_ID", object_id)]
-        if center:
-            meta.append(("CENTER_NAME", _text(center, "CENTER_NAME")))
-        meta += [("REF_FRAME_A", frame_a), ("REF_FRAME_B", frame_b), ("TIME_SYSTEM", ts),
-                 ("START_TIME", _isot9(times[a])), ("STOP_TIME", _isot9(times[b - 1])),
-                 ("ATTITUDE_TYPE", kind)]
-        if seq:
-            meta.append(("EULER_ROT_SEQ", seq))
-        if kind.endswith("/ANGVEL"):
-            meta.append(("ANGVEL_FRAME", frame_a if angvel_in_a else frame_b))
-        if interpolation_method is not None:
-            meta += [("INTERPOLATION_METHOD", _text(interpolation_method,
-                                                    "INTERPOLATION_METHOD")),
-                     ("INTERPOLATION_DEGREE", str(int(interpolation_degree)))]
-        segments.append((meta, a, b))
 
-    def rows(a: int, b: int) -> Iterator[tuple[str, list[str]]]:
+@dataclass(frozen=True)
+class _Output:
+    """An AEM ready to write: header, segment metadata, and the data items."""
+
+    kind: str
+    header_comments: list[str]
+    header: list[tuple[str, str]]
+    provenance: str                 # the COMMENT line of every metadata block
+    segments: list[tuple[list[tuple[str, str]], int, int]]   # metadata, start, stop
+    times: Time                     # calendar strings in the TIME_SYSTEM
+    values: np.ndarray              # data items after the epoch, (n, len(fields))
+
+    def rows(self, a: int, b: int) -> Iterator[tuple[str, list[str]]]:
+        """``(epoch, items)`` text of samples ``a:b``, formatted :data:`_CHUNK` at a time."""
         for c in range(a, b, _CHUNK):
             stop = min(c + _CHUNK, b)
-            chunk = times[c:stop]
-            chunk.precision = 9
-            epochs = np.atleast_1d(chunk.isot)
-            block = values[c:stop].tolist()
-            for epoch, vals in zip(epochs, block):
+            epochs = np.atleast_1d(format_epoch(self.times[c:stop]))
+            for epoch, vals in zip(epochs, self.values[c:stop].tolist()):
                 yield str(epoch), [_fmt(v) for v in vals]
 
-    if form == "kvn":
-        def write(tmp):
-            with open(tmp, "w", encoding="ascii", newline="\n") as fh:
-                fh.write(f"CCSDS_AEM_VERS = {CCSDS_AEM_VERS}\n")
-                for c in header_comments:
-                    fh.write(f"COMMENT {c}\n")
-                for key, value in header:
-                    fh.write(f"{key:<20} = {value}\n")
-                for meta, a, b in segments:
-                    fh.write(f"\nMETA_START\nCOMMENT {provenance}\n")
-                    for key, value in meta:
-                        fh.write(f"{key:<20} = {value}\n")
-                    fh.write("META_STOP\n\nDATA_START\n")
-                    fh.writelines(f"{e} {' '.join(v)}\n" for e, v in rows(a, b))
-                    fh.write("DATA_STOP\n")
+
+def _write_kvn(tmp: Path, out: _Output) -> None:
+    with open(tmp, "w", encoding="ascii", newline="\n") as fh:
+        fh.write(f"CCSDS_AEM_VERS = {CCSDS_AEM_VERS}\n")
+        for c in out.header_comments:
+            fh.write(f"COMMENT {c}\n")
+        for key, value in out.header:
+            fh.write(f"{key:<20} = {value}\n")
+        for meta, a, b in out.segments:
+            fh.write(f"\nMETA_START\nCOMMENT {out.provenance}\n")
+            for key, value in meta:
+                fh.write(f"{key:<20} = {value}\n")
+            fh.write("META_STOP\n\nDATA_START\n")
+            fh.writelines(f"{e} {' '.join(v)}\n" for e, v in out.rows(a, b))
+            fh.write("DATA_STOP\n")
+
+
+def _write_xml(tmp: Path, out: _Output) -> None:
+    with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+        fh.write('<?xml version="1.0" encoding="UTF-8"?>\n'
+                 '<aem xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"\n'
+                 '     xsi:noNamespaceSchemaLocation='
+                 '"https://sanaregistry.org/r/ndmxml_unqualified/'
+                 'ndmxml-4.0.0-master-4.0.xsd"\n'
+                 f'     id="CCSDS_AEM_VERS" version={quoteattr(CCSDS_AEM_VERS)}>\n'
+                 "  <header>\n")
+        for c in out.header_comments:
+            fh.write(f"    <COMMENT>{escape(c)}</COMMENT>\n")
+        for key, value in out.header:
+            fh.write(f"    <{key}>{escape(value)}</{key}>\n")
+        fh.write("  </header>\n  <body>\n")
+        for meta, a, b in out.segments:
+            fh.write("  <segment>\n    <metadata>\n"
+                     f"      <COMMENT>{escape(out.provenance)}</COMMENT>\n")
+            for key, value in meta:
+                fh.write(f"      <{key}>{escape(value)}</{key}>\n")
+            fh.write("    </metadata>\n    <data>\n")
+            fh.writelines(_state_xml(out.kind, e, v) for e, v in out.rows(a, b))
+            fh.write("    </data>\n  </segment>\n")
+        fh.write("  </body>\n</aem>\n")
+
+
+def _state_xml(kind: str, epoch: str, vals: list[str]) -> str:
+    """One ``<attitudeState>`` line of the XML form (table 7-5)."""
+    fields = _FIELDS[kind]
+    item = dict(zip(fields, vals))
+
+    def el(name: str) -> str:
+        unit = f' units="{_UNITS[name]}"' if name in _UNITS else ""
+        return f"<{name}{unit}>{item[name]}</{name}>"
+
+    body = [f"<EPOCH>{epoch}</EPOCH>"]
+    if kind.startswith("QUATERNION"):
+        body.append("<quaternion>" + "".join(el(k) for k in _Q) + "</quaternion>")
+        if kind == "QUATERNION/DERIVATIVE":
+            body.append("<quaternionDot>" + "".join(el(k) for k in _QDOT) + "</quaternionDot>")
+        elif kind == "QUATERNION/ANGVEL":
+            body.append("<angVel>" + "".join(el(k) for k in _ANGVEL) + "</angVel>")
     else:
-        tag = _XML_TAGS[kind][0]
-
-        def state_xml(epoch: str, vals: list[str]) -> str:
-            item = dict(zip(fields, vals))
-
-            def el(name: str) -> str:
-                unit = f' units="{_UNITS[name]}"' if name in _UNITS else ""
-                return f"<{name}{unit}>{item[name]}</{name}>"
-
-            body = [f"<EPOCH>{epoch}</EPOCH>"]
-            if kind.startswith("QUATERNION"):
-                body.append("<quaternion>" + "".join(el(k) for k in _Q) + "</quaternion>")
-                if kind == "QUATERNION/DERIVATIVE":
-                    body.append("<quaternionDot>" + "".join(el(k) for k in _QDOT)
-                                + "</quaternionDot>")
-                elif kind == "QUATERNION/ANGVEL":
-                    body.append("<angVel>" + "".join(el(k) for k in _ANGVEL) + "</angVel>")
-            else:
-                body += [el(k) for k in fields]
-            return (f"      <attitudeState><{tag}>{''.join(body)}</{tag}>"
-                    "</attitudeState>\n")
-
-        def write(tmp):
-            with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-                fh.write('<?xml version="1.0" encoding="UTF-8"?>\n'
-                         '<aem xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"\n'
-                         '     xsi:noNamespaceSchemaLocation='
-                         '"https://sanaregistry.org/r/ndmxml_unqualified/'
-                         'ndmxml-4.0.0-master-4.0.xsd"\n'
-                         f'     id="CCSDS_AEM_VERS" version={quoteattr(CCSDS_AEM_VERS)}>\n'
-                         "  <header>\n")
-                for c in header_comments:
-                    fh.write(f"    <COMMENT>{escape(c)}</COMMENT>\n")
-                for key, value in header:
-                    fh.write(f"    <{key}>{escape(value)}</{key}>\n")
-                fh.write("  </header>\n  <body>\n")
-                for meta, a, b in segments:
-                    fh.write("  <segment>\n    <metadata>\n"
-                             f"      <COMMENT>{escape(provenance)}</COMMENT>\n")
-                    for key, value in meta:
-                        fh.write(f"      <{key}>{escape(value)}</{key}>\n")
-                    fh.write("    </metadata>\n    <data>\n")
-                    fh.writelines(state_xml(e, v) for e, v in rows(a, b))
-                    fh.write("    </data>\n  </segment>\n")
-                fh.write("  </body>\n</aem>\n")
-
-    return write_atomically(path, write)
+        body += [el(k) for k in fields]
+    tag = _XML_TAGS[kind][0]
+    return f"      <attitudeState><{tag}>{''.join(body)}</{tag}></attitudeState>\n"
 
 
 def _text_comment(value) -> str:

@@ -21,9 +21,7 @@ expressed in the reference frame: ``R @ omega_body``.
 
 from __future__ import annotations
 
-import os
 import shutil
-import tempfile
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
@@ -31,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..ephemeris import Ephemeris
+from ..ephemeris import AtomicFiles, Ephemeris
 from ..errors import EphemerisFormatError, MissingDependencyError
 from .aem import read_aem
 
@@ -111,10 +109,12 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     sp = _spiceypy()
     if eph.is_batch:
         raise EphemerisFormatError("a CK holds one body: select one body of the batch")
-    body_id = int(body_id)
+    body_id = _naif_id(body_id, "body_id")
     if body_id >= 0:
-        raise ValueError(f"body_id must be a negative NAIF ID (spacecraft), got {body_id}")
-    instrument_id = body_id * 1000 if instrument_id is None else int(instrument_id)
+        raise EphemerisFormatError(f"body_id must be a negative NAIF ID (spacecraft), got "
+                                   f"{body_id}", key="body_id")
+    instrument_id = (body_id * 1000 if instrument_id is None else
+                     _naif_id(instrument_id, "instrument_id"))
     if reference_frame is None:
         try:
             reference_frame = SPICE_FRAMES[eph.frame.upper()]
@@ -125,74 +125,112 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
     if sp.namfrm(reference_frame) == 0:
         raise EphemerisFormatError(f"reference_frame {reference_frame!r} is not a SPICE "
                                    "built-in frame")
-    if not body_frame.replace("_", "").isalnum() or len(body_frame) > 32:
-        raise ValueError(f"body_frame {body_frame!r}: letters, digits and _ only, at most 32")
+    if (not isinstance(body_frame, str) or not body_frame.replace("_", "").isalnum()
+            or len(body_frame) > 32):
+        raise EphemerisFormatError(f"body_frame {body_frame!r}: letters, digits and _ only, "
+                                   "at most 32", key="body_frame")
     n = len(eph)
     if n < 2:
         raise EphemerisFormatError("a type 3 CK needs at least 2 samples")
-    t = eph.time
-    if not np.all(np.diff(t) > 0):
+    if not np.all(np.diff(eph.time) > 0):
         raise EphemerisFormatError("time must increase strictly")
-
-    # ET (TDB seconds past J2000) of the first sample, and ticks since it
-    epoch_tdb = eph.epoch.tdb
-    first = epoch_tdb + TimeDelta(t[0], format="sec") if eph.time_scale == "TDB" else \
-        eph.times[0].tdb
-    et0 = float((first - _J2000_TDB).to_value("s"))
-    if eph.time_scale == "TDB":
-        since = t - t[0]
-    else:
-        since = (eph.times.tdb - first).to_value("s")
-    ticks = np.asarray(since, dtype=float) * TICKS_PER_SECOND
-    if not np.all(np.diff(ticks) > 0) or ticks[-1] >= _MODULI[0] * _MODULI[1] - 1:
-        raise EphemerisFormatError("time span too long for the SCLK partition (136 years)")
-
-    q = eph.dataset.quaternion.values
-    quats = np.column_stack([q[:, 3], -q[:, 0], -q[:, 1], -q[:, 2]])  # C-matrix, scalar-first
-    dots = np.einsum("ij,ij->i", quats[1:], quats[:-1])               # continuous signs
-    quats *= np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])[:, None]
-    avvs = eph.rotation.apply(eph.dataset.angular_velocity.values)    # reference frame
+    et0, ticks = _sclk_ticks(eph)
+    quats, avvs = _ck_records(eph)
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     stem = path.stem
     names = {"ck": path.name, "sclk": f"{stem}.tsc", "fk": f"{stem}.tf",
              "lsk": f"{stem}.tls", "meta": f"{stem}.tm"}
-    tmpdir = Path(tempfile.mkdtemp(prefix=f".{stem}.", dir=path.parent))
-    try:
-        _write_lsk(tmpdir / names["lsk"], lsk)
-        (tmpdir / names["sclk"]).write_text(_sclk_text(body_id, et0, eph))
-        (tmpdir / names["fk"]).write_text(_fk_text(body_id, instrument_id, body_frame,
-                                                   reference_frame))
-        (tmpdir / names["meta"]).write_text(_meta_text([names[k] for k in
-                                                        ("lsk", "sclk", "fk", "ck")]))
+    if len(set(names.values())) < len(names):
+        raise EphemerisFormatError(f"{path}: the CK needs the suffix .bc (its kernels are "
+                                   f"{', '.join(names.values())})")
+    dest = {k: path.parent / name for k, name in names.items()}
+    with AtomicFiles(*dest.values()) as files:
+        _write_lsk(files[dest["lsk"]], lsk)
+        files[dest["sclk"]].write_text(_sclk_text(body_id, et0, eph))
+        files[dest["fk"]].write_text(_fk_text(body_id, instrument_id, body_frame,
+                                              reference_frame))
+        files[dest["meta"]].write_text(_meta_text([names[k] for k in
+                                                   ("lsk", "sclk", "fk", "ck")]))
         lines = [f"Attitude ephemeris written by attitude: {n} samples, body "
                  f"{body_frame} ({instrument_id}) relative to {reference_frame}.",
                  f"Epoch {eph.dataset.attrs['epoch']} {eph.time_scale}, SCLK id {body_id} "
                  f"({TICKS_PER_SECOND} ticks/s from ET {et0!r}).",
                  f"Kernels: {names['sclk']} (SCLK), {names['fk']} (FK), {names['lsk']} (LSK)."]
         lines += [line for line in comment.splitlines() if line]
-        handle = sp.ckopn(str(tmpdir / names["ck"]), f"attitude {stem}"[:60],
-                          sum(len(x) + 1 for x in lines) + 1000)
-        try:
-            sp.dafac(handle, [x[:1000] for x in lines])
-            for i0 in range(0, n - 1, _SEGMENT_RECORDS):
-                i1 = min(n, i0 + _SEGMENT_RECORDS + 1)       # segments share boundaries
-                sl = slice(i0, i1)
-                sp.ckw03(handle, ticks[i0], ticks[i1 - 1], instrument_id, reference_frame,
-                         True, f"attitude {body_frame}"[:40], i1 - i0,
-                         np.ascontiguousarray(ticks[sl]), np.ascontiguousarray(quats[sl]),
-                         np.ascontiguousarray(avvs[sl]), 1, [ticks[i0]])
-        finally:
-            sp.ckcls(handle)
-        for name in names.values():
-            os.replace(tmpdir / name, path.parent / name)
-    finally:
-        shutil.rmtree(tmpdir, ignore_errors=True)
-    d = path.parent
-    return CKFiles(ck=path, sclk=d / names["sclk"], fk=d / names["fk"], lsk=d / names["lsk"],
-                   meta=d / names["meta"], body_id=body_id, instrument_id=instrument_id,
+        _write_ck_segments(sp, files[dest["ck"]], f"attitude {stem}"[:60], lines,
+                           ticks, quats, avvs, instrument_id, reference_frame,
+                           f"attitude {body_frame}"[:40])
+    return CKFiles(ck=path, sclk=dest["sclk"], fk=dest["fk"], lsk=dest["lsk"],
+                   meta=dest["meta"], body_id=body_id, instrument_id=instrument_id,
                    body_frame=body_frame, reference_frame=reference_frame)
+
+
+def _sclk_ticks(eph: Ephemeris) -> tuple[float, np.ndarray]:
+    """ET (TDB seconds past J2000) of the first sample, and the SCLK ticks of every
+    sample since it (:data:`TICKS_PER_SECOND` per TDB second)."""
+    t = eph.time
+    if eph.time_scale == "TDB":
+        first = eph.epoch.tdb + TimeDelta(t[0], format="sec")
+        since = t - t[0]
+    else:
+        first = eph.times[0].tdb
+        since = (eph.times.tdb - first).to_value("s")
+    et0 = float((first - _J2000_TDB).to_value("s"))
+    ticks = np.asarray(since, dtype=float) * TICKS_PER_SECOND
+    if not np.all(np.diff(ticks) > 0) or ticks[-1] >= _MODULI[0] * _MODULI[1] - 1:
+        raise EphemerisFormatError("time span too long for the SCLK partition (136 years)")
+    return et0, ticks
+
+
+def _ck_records(eph: Ephemeris) -> tuple[np.ndarray, np.ndarray]:
+    """C-matrix quaternions (scalar first, signs kept continuous from one record to the
+    next) and angular velocities in the reference frame, rad/s."""
+    q = eph.dataset.quaternion.values
+    quats = np.column_stack([q[:, 3], -q[:, 0], -q[:, 1], -q[:, 2]])
+    dots = np.einsum("ij,ij->i", quats[1:], quats[:-1])
+    quats *= np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])[:, None]
+    return quats, eph.rotation.apply(eph.dataset.angular_velocity.values)
+
+
+def _write_ck_segments(sp, target: Path, internal_name: str, comments: list[str],
+                       ticks, quats, avvs, instrument_id: int, reference_frame: str,
+                       segment_id: str) -> None:
+    """The type 3 CK itself: the comment area, then segments of at most
+    ``_SEGMENT_RECORDS`` records sharing their boundary records."""
+    n = len(ticks)
+    handle = sp.ckopn(str(target), internal_name, sum(len(x) + 1 for x in comments) + 1000)
+    try:
+        sp.dafac(handle, [x[:1000] for x in comments])
+        for i0 in range(0, n - 1, _SEGMENT_RECORDS):
+            i1 = min(n, i0 + _SEGMENT_RECORDS + 1)       # segments share boundaries
+            sl = slice(i0, i1)
+            sp.ckw03(handle, ticks[i0], ticks[i1 - 1], instrument_id, reference_frame,
+                     True, segment_id, i1 - i0, np.ascontiguousarray(ticks[sl]),
+                     np.ascontiguousarray(quats[sl]), np.ascontiguousarray(avvs[sl]), 1,
+                     [ticks[i0]])
+    except BaseException:
+        # close without ckcls, which refuses a CK without segments and would hide the
+        # original error; the temporary file is discarded anyway
+        try:
+            sp.dafcls(handle)
+        except Exception:  # noqa: BLE001
+            pass
+        raise
+    sp.ckcls(handle)
+
+
+def _naif_id(value, key: str) -> int:
+    """A NAIF ID given as an integer (or its text)."""
+    try:
+        number = int(value)
+    except (TypeError, ValueError):
+        raise EphemerisFormatError(f"{value!r}: a NAIF ID is an integer, such as -999",
+                                   key=key) from None
+    if number != value and str(number) != str(value).strip():
+        raise EphemerisFormatError(f"{value!r}: a NAIF ID is an integer, such as -999",
+                                   key=key)
+    return number
 
 
 def _sclk_text(body_id: int, et0: float, eph: Ephemeris) -> str:
@@ -265,6 +303,8 @@ KERNELS_TO_LOAD = (
 
 def _write_lsk(target: Path, lsk) -> None:
     if lsk is not None:
+        if not Path(lsk).is_file():
+            raise EphemerisFormatError(f"{lsk}: no such leap-seconds kernel", key="lsk")
         shutil.copyfile(lsk, target)
         return
     try:
