@@ -56,13 +56,13 @@ from collections.abc import Callable, Mapping, Sequence
 import erfa
 import numpy as np
 from astropy import units as u
-from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 from .body import SYMMETRY_RTOL, RigidBody
 from .errors import OrbitError, TorqueConfigError
 from .orbit import KeplerOrbit, as_path
-from .quantities import parse_quantity
+from .quantities import to_si, to_time
+from .spec import Key, Table, validate
 
 __all__ = [
     "TorqueModel",
@@ -198,51 +198,13 @@ def _matvec(inertia: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _quantity(value, unit: str, key: str, *, shape: tuple | None = ()):
-    """A number (SI), a string parsed by astropy, a Quantity, or ``{value, unit}``."""
-    target = u.Unit(unit)
-    if isinstance(value, bool) or value is None:
-        raise TorqueConfigError(f"expected a quantity in {target}, got {value!r}", key=key)
-    if isinstance(value, Mapping):
-        _check_keys(value, ("value", "unit"), key)
-        if "value" not in value or "unit" not in value:
-            raise TorqueConfigError("a quantity table needs both 'value' and 'unit'", key=key)
-        try:
-            q = u.Quantity(value["value"], u.Unit(value["unit"]), dtype=float)
-        except (ValueError, TypeError) as exc:
-            raise TorqueConfigError(f"cannot read {dict(value)!r} as a quantity "
-                                    f"({exc})", key=key) from None
-    elif isinstance(value, str):
-        try:
-            q = parse_quantity(value)
-        except (ValueError, TypeError):
-            raise TorqueConfigError(f"cannot parse {value!r} as a quantity; write a "
-                                    f"number and a unit such as '1.5 {target}'", key=key) from None
-    elif isinstance(value, u.Quantity):
-        q = value
-    else:
-        try:
-            q = np.asarray(value, dtype=float) * target
-        except (ValueError, TypeError):
-            raise TorqueConfigError(f"expected a number or a quantity in {target}, "
-                                    f"got {value!r}", key=key) from None
-    try:
-        equiv = u.dimensionless_angles() if target.physical_type != "dimensionless" else []
-        out = np.asarray(q.to_value(target, equivalencies=equiv), dtype=float)
-    except u.UnitConversionError:
-        raise TorqueConfigError(f"unit '{q.unit}' cannot be converted to "
-                                f"'{target}'", key=key) from None
-    if shape is not None and out.shape != shape:
-        raise TorqueConfigError(f"expected shape {shape}, got {out.shape}", key=key)
-    if not np.all(np.isfinite(out)):
-        raise TorqueConfigError(f"every value must be finite, got {out.tolist()}", key=key)
-    return float(out) if out.ndim == 0 else out
+    """A number (SI), a string parsed by astropy, a Quantity, or ``{value, unit}``
+    (:func:`attitude.quantities.to_si`, raising :class:`TorqueConfigError`)."""
+    return to_si(value, unit, key=key, shape=shape, error=TorqueConfigError)
 
 
 def _positive(value, unit: str, key: str) -> float:
-    x = _quantity(value, unit, key)
-    if not x > 0:
-        raise TorqueConfigError(f"must be positive, got {x!r} {u.Unit(unit)}", key=key)
-    return x
+    return to_si(value, unit, key=key, shape=(), positive=True, error=TorqueConfigError)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
@@ -946,7 +908,77 @@ class HeavyTopPivot(TorqueModel):
 
 # --- scenario tables -------------------------------------------------------------------
 
-_ORBIT_KEYS = ("a", "e", "i", "raan", "argp", "mean_anomaly", "epoch")
+#: An inline orbit table ``orbit = { a = "7000 km", e = 0.0, ... }``.
+ORBIT_TABLE = Table("orbit", (
+    Key("a", "quantity", unit="m", required=True, positive=True, doc="semi-major axis"),
+    Key("e", "quantity", unit="", bounds=(0.0, None), default=0,
+        doc="eccentricity, 0 <= e < 1"),
+    Key("i", "quantity", unit="rad", default=0, doc="inclination"),
+    Key("raan", "quantity", unit="rad", default=0,
+        doc="right ascension of the ascending node"),
+    Key("argp", "quantity", unit="rad", default=0, doc="argument of periapsis"),
+    Key("mean_anomaly", "quantity", unit="rad", default=0, doc="mean anomaly at `epoch`"),
+    Key("epoch", "time", doc="when `mean_anomaly` holds; default the scenario epoch"),
+), doc="Keplerian elements of the body's orbit about the primary, inertial frame")
+
+_FIELD_TABLE = Table("field", (
+    Key("model", "string", choices=("dipole", "uniform"), default="dipole",
+        doc="the Earth's tilted dipole along `orbit`, or a uniform field"),
+    Key("moment", "quantity", unit="A m2", positive=True, doc="dipole moment"),
+    Key("tilt", "quantity", unit="rad", doc="dipole tilt from the inertial z axis"),
+    Key("pole_longitude", "quantity", unit="rad", doc="longitude of the dipole pole"),
+    Key("rotation_angle", "quantity", unit="rad",
+        doc="Earth rotation angle at t = 0; default from the scenario epoch"),
+    Key("rotation_rate", "quantity", unit="rad/s", doc="Earth rotation rate"),
+    Key("vector", "quantity", unit="T", shape=(3,), doc="uniform field, inertial frame"),
+), excludes=(("vector", ("moment", "tilt", "pole_longitude", "rotation_angle",
+                          "rotation_rate")),))
+
+#: The keys of each ``[[torques]]`` type (``type`` selects the table).
+TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
+    Table("gravity_gradient", (
+        Key("mu", "quantity", unit="m3/s2", required=True, positive=True,
+            doc="gravitational parameter of the primary"),
+        Key("orbit", "table", required=True, table=ORBIT_TABLE, doc=ORBIT_TABLE.doc),
+    ), doc="Point-mass primary: `3 mu / r^5 (r x I r)`."),
+    Table("constant", (
+        Key("torque", "quantity", unit="N m", shape=(3,), required=True, doc="the torque"),
+        Key("frame", "string", choices=("body", "inertial"), default="body",
+            doc="axes of `torque`"),
+    ), doc="A fixed torque in body or inertial axes."),
+    Table("dissipation", (
+        Key("time_constant", "quantity", unit="s", required=True, positive=True,
+            doc="e-folding time of the excess energy"),
+    ), doc="Internal energy dissipation (damper, fuel slosh); the inertial L is kept."),
+    Table("eddy_current", (
+        Key("magnetic_tensor", "quantity", unit="S m4", shape=((), (3, 3)),
+            doc="magnetic tensor, body frame (scalar: isotropic)"),
+        Key("shell", "table", table=Table("shell", (
+            Key("radius", "quantity", unit="m", required=True, positive=True),
+            Key("thickness", "quantity", unit="m", required=True, positive=True),
+            Key("conductivity", "quantity", unit="S/m", required=True, positive=True))),
+            doc="thin conducting spherical shell"),
+        Key("sphere", "table", table=Table("sphere", (
+            Key("radius", "quantity", unit="m", required=True, positive=True),
+            Key("conductivity", "quantity", unit="S/m", required=True, positive=True))),
+            doc="solid conducting sphere"),
+        Key("field", "table", table=_FIELD_TABLE,
+            doc="the magnetic field; default the Earth's tilted dipole"),
+        Key("mu", "quantity", unit="m3/s2", positive=True,
+            doc="gravitational parameter of the primary (dipole field); default the Earth's"),
+        Key("orbit", "table", table=ORBIT_TABLE, doc=ORBIT_TABLE.doc + " (dipole field)"),
+    ), exactly_one=(("magnetic_tensor", "shell", "sphere"),),
+        doc="Eddy currents induced by a magnetic field: `(M (w x B)) x B`."),
+    Table("heavy_top", (
+        Key("pivot_to_com", "quantity", unit="m", shape=(3,), required=True,
+            doc="pivot -> centre of mass, body frame"),
+        Key("mass", "quantity", unit="kg", positive=True, doc="default the body's mass"),
+        Key("g", "quantity", unit="m/s2", positive=True, doc="gravity; default 9.80665"),
+        Key("up", "quantity", unit="", shape=(3,), doc="inertial unit vector, up"),
+    ), doc="Uniform gravity about a fixed pivot."),
+)}
+
+_ORBIT_KEYS = ORBIT_TABLE.names()
 
 
 def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
@@ -970,12 +1002,8 @@ def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
         if base_epoch is None:
             raise TorqueConfigError("an orbit epoch needs the scenario epoch "
                                     "(from_config(..., base_epoch=...))", key=f"{key}.epoch")
-        try:
-            epoch = (table["epoch"] if isinstance(table["epoch"], Time)
-                     else Time(table["epoch"], scale=base_epoch.scale))
-        except (ValueError, TypeError) as exc:
-            raise TorqueConfigError(f"cannot read {table['epoch']!r} as a "
-                                    f"time ({exc})", key=f"{key}.epoch") from None
+        epoch = to_time(table["epoch"], scale=base_epoch.scale, key=f"{key}.epoch",
+                        error=TorqueConfigError)
         dt = float((base_epoch - epoch).to_value(u.s))
         orbit = KeplerOrbit(orbit.mu, orbit.a, orbit.e, orbit.i, orbit.raan, orbit.argp,
                             orbit.mean_anomaly + orbit.mean_motion * dt)
@@ -1181,9 +1209,12 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
     if "type" not in table:
         raise TorqueConfigError(f"missing; choose one of {', '.join(TORQUE_TYPES)}", key="type")
     kind = table["type"]
-    if kind not in TORQUE_TYPES:
-        near = difflib.get_close_matches(str(kind), list(TORQUE_TYPES), n=1)
+    if not isinstance(kind, str) or kind not in TORQUE_TYPES:
+        near = difflib.get_close_matches(kind, list(TORQUE_TYPES), n=1) if isinstance(
+            kind, str) else []
         did = f"did you mean {near[0]!r}? " if near else ""
         raise TorqueConfigError(f"unknown torque type {kind!r}; {did}choose one of "
                                 f"{', '.join(TORQUE_TYPES)}", key="type")
+    spec = TORQUE_TABLES[kind]
+    validate(table, spec.with_keys(Key("type", "string")), error=TorqueConfigError)
     return TORQUE_TYPES[kind](table, base_epoch)
