@@ -158,8 +158,8 @@ def _from_table(value: Mapping, target: u.UnitBase, key, error) -> u.Quantity:
         missing = "value" if "value" not in value else "unit"
         raise error(f"a quantity table needs both 'value' and 'unit' (no {missing!r}); "
                     f"write {{ value = ..., unit = \"{target}\" }}", key=key)
-    unit = read_unit(value["unit"], key=f"{key}.unit" if key else "unit", error=error)
-    return _numbers(value["value"], f"{key}.value" if key else "value", error, target) * unit
+    unit = read_unit(value["unit"], key=key, error=error)
+    return _numbers(value["value"], key, error, target) * unit
 
 
 def _numbers(value, key, error, target) -> np.ndarray:

@@ -90,6 +90,8 @@ class Key:
         ``Table.name`` is that value).
     discriminator : str
         The key that chooses the variant (default ``"type"``).
+    nonempty : bool
+        A ``"map"`` needs at least one entry.
     scale_key : str
         For ``"time"`` keys: the sibling key holding the time scale (default
         ``"time_scale"``; ``"tdb"`` when absent).
@@ -115,6 +117,7 @@ class Key:
     variants: tuple = ()
     discriminator: str = "type"
     scale_key: str = "time_scale"
+    nonempty: bool = False
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -315,37 +318,40 @@ def validate(doc, table: Table, *, where: str = "", path=None,
                         key=_join(where, key.name), path=path)
     _rules(doc, table, where, path, error)
     out = {}
-    for name, value in doc.items():
+    # epochs last: their time scale is a sibling key, checked first
+    for name in sorted(doc, key=lambda n: n in table and table[n].kind == "time"):
         key = table.by_name.get(name)
+        value = doc[name]
         out[name] = value if key is None else _value(value, key, doc, _join(where, name),
                                                      path, error)
-    return out
+    return {name: out[name] for name in doc}
 
 
 def _rules(doc, table: Table, where, path, error) -> None:
-    for group in table.exactly_one:
-        given = [k for k in group if k in doc]
-        if len(given) != 1:
-            raise error(f"give exactly one of {', '.join(group)} (got "
-                        f"{', '.join(given) or 'none'})",
-                        key=_join(where, given[1]) if len(given) > 1 else where or None,
-                        path=path)
+    for name, others in table.excludes:
+        if name in doc:
+            for other in others:
+                if other in doc:
+                    what = _join(where, name) if where else f"[{name}]"
+                    raise error(f"not with {what}", key=_join(where, other), path=path)
+    for name, others in table.needs:
+        if name in doc:
+            for other in others:
+                if other not in doc:
+                    raise error(f"missing key (needed with {_join(where, name)})",
+                                key=_join(where, other), path=path)
     for group in table.at_most_one:
         given = [k for k in group if k in doc]
         if len(given) > 1:
             raise error(f"give at most one of {', '.join(group)}",
                         key=_join(where, given[1]), path=path)
-    for name, others in table.needs:
-        if name in doc:
-            for other in others:
-                if other not in doc:
-                    raise error(f"missing key (needed with {name})",
-                                key=_join(where, other), path=path)
-    for name, others in table.excludes:
-        if name in doc:
-            for other in others:
-                if other in doc:
-                    raise error(f"not with {name}", key=_join(where, other), path=path)
+    for group in table.exactly_one:
+        given = [k for k in group if k in doc]
+        if len(given) != 1:
+            raise error(f"give exactly one of {', '.join(group)} (got "
+                        f"{', '.join(given) or 'none'})",
+                        key=_join(where, given[1] if len(given) > 1 else group[0]),
+                        path=path)
 
 
 def _number_checks(x: float, key: Key, where, path, error) -> None:
@@ -421,7 +427,7 @@ def _value(value, key: Key, parent: Mapping, where: str, path, error):
             for name in value:
                 if name not in key.choices:
                     raise _unknown(name, key.choices, _join(where, name), error, path)
-        if not value and key.required:
+        if not value and key.nonempty:
             raise error("expected a non-empty table", key=where, path=path)
         return {name: validate(v, key.table, where=_join(where, name), path=path,
                                error=error) for name, v in value.items()}
@@ -447,8 +453,9 @@ def _variant(value: Mapping, key: Key, where: str, path, error) -> dict:
         hint = f"did you mean '{near[0]}'? " if near else ""
         raise error(f"unknown {d} {kind!r}; {hint}choose one of {', '.join(names)}"[:300],
                     key=_join(where, d), path=path)
-    return validate(value, key.variants[names.index(kind)], where=where, path=path,
-                    error=error)
+    table = key.variants[names.index(kind)]
+    return validate(value, table.with_keys(Key(d, "string")) if d not in table else table,
+                    where=where, path=path, error=error)
 
 
 # --- JSON Schema ---------------------------------------------------------------------
@@ -521,7 +528,7 @@ def _key_schema(key: Key) -> dict:
         out = {"type": "object", "additionalProperties": json_schema(key.table, root=False)}
         if key.choices is not None:
             out["propertyNames"] = {"enum": list(key.choices)}
-        if key.required:
+        if key.nonempty:
             out["minProperties"] = 1
     elif kind == "tables":
         if key.variants:
