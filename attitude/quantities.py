@@ -105,7 +105,7 @@ def read_unit(text, *, key=None, like=None, error=QuantityError) -> u.UnitBase:
     >>> read_unit("kg", key="expect.x.unit", like="s")
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: expect.x.unit: unit 'kg' is not a time (it cannot be converted to 's') ...
+    attitude.errors.QuantityError: expect.x.unit: unit 'kg' cannot be converted to 's' ...
     """
     if isinstance(text, u.UnitBase):
         unit = text
@@ -237,7 +237,7 @@ def to_si(value, unit, *, key: str | None = None, shape=None, positive: bool = F
     >>> to_si([1, 2, 3], "s", key="propagation.duration", shape=())
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: propagation.duration: expected a single number (in s), got 3 numbers ...
+    attitude.errors.QuantityError: propagation.duration: expected a single number ...
     >>> to_si("-1 s", "s", key="propagation.step", positive=True)
     Traceback (most recent call last):
     ...
@@ -273,12 +273,12 @@ def _check(out, target, key, error, *, shape, positive, nonnegative, finite, bou
     if shape is not None:
         shapes = shape if (len(shape) and isinstance(shape[0], tuple)) else (shape,)
         if tuple(out.shape) not in shapes:
-            want = " or ".join(_shape_text(s) for s in shapes)
             got = _shape_text(out.shape) if out.ndim else "a single number"
             if out.size == 0:
                 got = "an empty list"
-            raise error(f"expected shape {' or '.join(map(str, shapes))}: {want} (in "
-                        f"{target or '1'}), got shape {out.shape}: {got}", key=key)
+            want = " or ".join(f"{_shape_text(s)} (shape {s})" for s in shapes)
+            raise error(f"expected {want} in {target or '1'}, got {got} (shape {out.shape})",
+                        key=key)
     if out.size == 0:
         raise error(f"expected at least one number (in {target or '1'}), got an empty list",
                     key=key)
@@ -369,7 +369,7 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
     >>> to_time("2023-02-30T00:00:00", key="state.epoch")
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: state.epoch: '2023-02-30T00:00:00' is not a date: day 30 does not exist: February 2023 has 28 days
+    attitude.errors.QuantityError: state.epoch: '2023-02-30T00:00:00' is not a date: day 30 ...
     """
     if isinstance(value, Time):
         if not value.isscalar:

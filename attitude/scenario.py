@@ -8,7 +8,10 @@ See the scenario section of the docs for the full format.
 
 from __future__ import annotations
 
+import argparse
 import difflib
+import json
+import sys
 import tomllib
 import warnings
 from dataclasses import dataclass
@@ -846,10 +849,6 @@ def scenario_reference() -> str:
 
 
 def _main(argv=None) -> int:
-    import argparse  # only for the command line of this module
-    import json
-    import sys
-
     parser = argparse.ArgumentParser(
         prog="python -m attitude.scenario",
         description="Print the scenario format generated from attitude.scenario_spec.")

@@ -30,7 +30,7 @@ Examples
 >>> validate({"duration": [1, 2, 3]}, prop, where="propagation", path="run.toml")
 Traceback (most recent call last):
 ...
-attitude.errors.AttitudeError: run.toml: propagation.duration: expected a single number (in s), got 3 numbers
+attitude.errors.AttitudeError: run.toml: propagation.duration: expected a single number ...
 """
 
 from __future__ import annotations
@@ -187,7 +187,7 @@ class Table:
     >>> validate({"rel_tol": 0.1, "abs_tol": 1.0}, t, where="expect.x")
     Traceback (most recent call last):
     ...
-    attitude.errors.AttitudeError: expect.x: give exactly one of rel_tol, abs_tol (got rel_tol, abs_tol)
+    attitude.errors.AttitudeError: expect.x.abs_tol: give exactly one of rel_tol, abs_tol ...
     """
 
     name: str
@@ -350,7 +350,8 @@ def _rules(doc, table: Table, where, path, error) -> None:
         if len(given) != 1:
             raise error(f"give exactly one of {', '.join(group)} (got "
                         f"{', '.join(given) or 'none'})",
-                        key=_join(where, given[1] if len(given) > 1 else group[0]),
+                        key=_join(where, given[1]) if len(given) > 1 else (
+                            where or group[0]),
                         path=path)
 
 

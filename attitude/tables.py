@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from astropy import units as u
 
 from .body import diagonal_inertia
 from .errors import InvalidInertiaError, InvalidStateError
@@ -114,16 +113,13 @@ def _column_getter(columns):
         try:
             values = np.asarray(values, dtype=float)
         except (TypeError, ValueError):
-            raise InvalidStateError(f"table column {name}: expected numbers") from None
-        if not unit:
-            return values
-        try:
-            values = values * u.Unit(unit)
-        except ValueError:
-            raise InvalidStateError(f"table column {name}: cannot parse the unit "
-                                    f"[{unit}]") from None
-        return to_si(values, si or u.dimensionless_unscaled, name=f"table column {name}",
-                     error=InvalidStateError)
+            raise InvalidStateError(f"expected numbers, got {list(values)[:3]!r}...",
+                                    key=f"column {name}") from None
+        if values.size == 0:
+            raise InvalidStateError("the table has no rows", key=f"column {name}")
+        # NaN rows are kept: they become invalid bodies, reported by index
+        return to_si({"value": values, "unit": unit or si}, si, key=f"column {name}",
+                     finite=False, error=InvalidStateError)
 
     return get
 

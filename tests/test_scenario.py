@@ -58,7 +58,7 @@ def test_good_scenario_is_parsed_with_units(tmp_path):
     ("principal_moments = [1.0, 2.0, 3.0]", "principal_moments = [1.0, 1.0, 3.0]",
      "body.principal_moments", "triangle inequality"),
     ("principal_moments = [1.0, 2.0, 3.0]", "principal_moments = [1.0, 2.0]",
-     "body.principal_moments", "expected shape"),
+     "body.principal_moments", r"expected 3 numbers \(shape \(3,\)\)"),
     ("principal_moments = [1.0, 2.0, 3.0]", 'principal_moments = "three"', "body.principal_moments",
      "cannot parse"),
     ('frame = "ICRF"', 'frame = "ICFR"', "state.frame", "did you mean 'ICRF'"),
