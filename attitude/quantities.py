@@ -144,6 +144,11 @@ def _kind(unit: u.UnitBase) -> str:
     return ("an " if kind[0] in "aeiou" else "a ") + kind
 
 
+def _u(unit) -> str:
+    """A unit for messages: ``"1"`` for a pure number."""
+    return str(unit) or "1"
+
+
 def _hint(unit: u.UnitBase) -> str:
     return f"1.5 {unit}" if str(unit) else "1.5"
 
@@ -165,12 +170,12 @@ def _from_table(value: Mapping, target: u.UnitBase, key, error) -> u.Quantity:
 def _numbers(value, key, error, target) -> np.ndarray:
     if isinstance(value, (bool, np.bool_)) or value is None or isinstance(value, (
             str, Mapping)):
-        raise error(f"expected a quantity (numbers in {target or '1'}, a string such as "
+        raise error(f"expected a quantity (numbers in {_u(target)}, a string such as "
                     f"'{_hint(target)}' or {{ value, unit }}), got {value!r}", key=key)
     try:
         out = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise error(f"expected numbers (in {target or '1'}), got {value!r}; a vector is "
+        raise error(f"expected numbers (in {_u(target)}), got {value!r}; a vector is "
                     "a list of numbers of equal length", key=key) from None
     if isinstance(value, (list, tuple)) and any(isinstance(x, (bool, np.bool_))
                                                 for x in np.ravel(np.asarray(value, object))):
@@ -182,7 +187,7 @@ def _shape_text(shape) -> str:
     if shape == ():
         return "a single number"
     if len(shape) == 1:
-        return f"{shape[0]} numbers"
+        return f"{shape[0]} number" + ("" if shape[0] == 1 else "s")
     return "x".join(map(str, shape)) + " numbers (nested lists)"
 
 
@@ -277,10 +282,10 @@ def _check(out, target, key, error, *, shape, positive, nonnegative, finite, bou
             if out.size == 0:
                 got = "an empty list"
             want = " or ".join(f"{_shape_text(s)} (shape {s})" for s in shapes)
-            raise error(f"expected {want} in {target or '1'}, got {got} (shape {out.shape})",
+            raise error(f"expected {want} in {_u(target)}, got {got} (shape {out.shape})",
                         key=key)
     if out.size == 0:
-        raise error(f"expected at least one number (in {target or '1'}), got an empty list",
+        raise error(f"expected at least one number (in {_u(target)}), got an empty list",
                     key=key)
     show = _show(out, target)
     if finite and not np.all(np.isfinite(out)):

@@ -67,7 +67,7 @@ def as_epoch(epoch, *, error=InvalidStateError) -> Time:
 
 def as_omega(omega, *, name: str = "omega_body", error=InvalidStateError) -> np.ndarray:
     """Angular velocity in rad/s from floats (rad/s), a Quantity or a string."""
-    w = np.array(to_si(omega, "rad/s", name=name, error=error), dtype=float)  # a copy
+    w = np.array(to_si(omega, "rad/s", name=name, finite=False, error=error), dtype=float)  # a copy
     if w.shape != (3,):
         raise error(f"{name}: expected 3 components, got shape {w.shape}")
     if not np.all(np.isfinite(w)):
