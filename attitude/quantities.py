@@ -337,7 +337,7 @@ def _date_problem(text: str) -> str | None:
 
 
 def to_time(value, *, scale: str | None = None, key: str | None = None,
-            error: type = QuantityError) -> Time:
+            error: type = QuantityError, precision: int | None = 9) -> Time:
     """Read an epoch: an astropy ``Time``, an ISO 8601 string, or ``{value, scale}``.
 
     Parameters
@@ -352,11 +352,14 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
         The field, named by the error.
     error : type
         The :class:`~attitude.errors.AttitudeError` subclass raised.
+    precision : int or None
+        Decimal places of the seconds in the time's text forms (default 9; None:
+        astropy's default).
 
     Returns
     -------
     astropy.time.Time
-        A scalar time with ``precision = 9``.
+        A scalar time.
 
     Raises
     ------
@@ -406,7 +409,8 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
             warnings.filterwarnings("ignore", message=".*dubious year",
                                     category=erfa.ErfaWarning)
             warnings.filterwarnings("error", message=".*end of day", category=erfa.ErfaWarning)
-            t = Time(value, scale=scale.lower(), precision=9)
+            t = Time(value, scale=scale.lower(),
+                     **({} if precision is None else {"precision": precision}))
             t.jd1    # noqa: B018  (forces the conversion, so bad seconds warn here)
             if t.scale == "utc":
                 t.tai    # noqa: B018  (a second 60 outside a leap second warns)

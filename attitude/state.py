@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from .body import RigidBody
 from .errors import InvalidStateError
-from .quantities import to_si
+from .quantities import to_si, to_time
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
            "direction_frame", "spin_axis_quaternion"]
@@ -52,12 +53,9 @@ def check_frame(frame: str, *, error=InvalidStateError) -> str:
 
 def as_epoch(epoch, *, error=InvalidStateError) -> Time:
     """A scalar astropy Time; strings are parsed in :data:`DEFAULT_TIME_SCALE`."""
-    if isinstance(epoch, str):
-        try:
-            epoch = Time(epoch, scale=DEFAULT_TIME_SCALE)
-        except ValueError as exc:
-            raise error(f"epoch: cannot parse {epoch!r} as a time ({exc}); use ISO 8601 "
-                        "such as '2029-04-13T00:00:00'") from None
+    if isinstance(epoch, (str, Mapping)):
+        epoch = to_time(epoch, scale=DEFAULT_TIME_SCALE, key="epoch", error=error,
+                        precision=None)
     if not isinstance(epoch, Time):
         raise error(f"epoch: expected an astropy Time or an ISO 8601 string, got {epoch!r}")
     if not epoch.isscalar:
