@@ -391,7 +391,6 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
         if "scale" in value:
             scale = value["scale"]
         value = value["value"]
-        key = f"{key}.value" if key else "value"
     scale = "tdb" if scale is None else scale
     if not isinstance(scale, str) or scale.lower() not in TIME_SCALES:
         raise error(f"{scale!r} is not a time scale; use one of {', '.join(TIME_SCALES)}",

@@ -61,8 +61,8 @@ from scipy.spatial.transform import Rotation
 from .body import SYMMETRY_RTOL, RigidBody
 from .errors import OrbitError, TorqueConfigError
 from .orbit import KeplerOrbit, as_path
-from .quantities import to_si, to_time
-from .spec import Key, Table, validate
+from .quantities import to_si
+from .spec import SYNONYMS, Key, Table, validate
 
 __all__ = [
     "TorqueModel",
@@ -211,7 +211,7 @@ def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
     for key in table:
         if key not in allowed:
             path = f"{where}.{key}" if where else str(key)
-            hint = _SYNONYMS.get(str(key).lower())
+            hint = SYNONYMS.get(str(key).lower())
             if hint not in allowed:
                 near = difflib.get_close_matches(str(key), list(allowed), n=1)
                 hint = near[0] if near else None
@@ -220,15 +220,6 @@ def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
                                     f"{', '.join(allowed)}", key=path)
 
 
-_SYNONYMS = {
-    "eccentricity": "e", "inclination": "i", "semi_major_axis": "a", "semimajor_axis": "a",
-    "sma": "a", "right_ascension": "raan", "node": "raan", "omega": "argp",
-    "argument_of_periapsis": "argp", "argument_of_perigee": "argp", "arg_periapsis": "argp",
-    "m0": "mean_anomaly", "m": "mean_anomaly", "tau": "time_constant",
-    "timescale": "time_constant", "gm": "mu", "vector": "torque", "value": "torque",
-    "conductivity_tensor": "magnetic_tensor", "tensor": "magnetic_tensor", "l": "pivot_to_com",
-    "com": "pivot_to_com", "gravity": "g",
-}
 
 
 # --- the protocol --------------------------------------------------------------------
@@ -978,33 +969,18 @@ TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
     ), doc="Uniform gravity about a fixed pivot."),
 )}
 
-_ORBIT_KEYS = ORBIT_TABLE.names()
-
-
 def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
-    if not isinstance(table, Mapping):
-        raise TorqueConfigError("expected a table { a = \"7000 km\", e = 0.0, "
-                                "i = \"0 deg\", ... }", key=key)
-    _check_keys(table, _ORBIT_KEYS, key)
-    if "a" not in table:
-        raise TorqueConfigError("missing: the semi-major axis is required", key=f"{key}.a")
-    elements = {"mu": mu}
-    units = {"a": "m", "e": "", "i": "rad", "raan": "rad", "argp": "rad",
-             "mean_anomaly": "rad"}
-    for name, unit in units.items():
-        if name in table:
-            elements[name] = _quantity(table[name], unit, f"{key}.{name}")
+    """A validated :data:`ORBIT_TABLE` (SI values; ``epoch`` an astropy Time) -> orbit."""
+    elements = {k: table[k] for k in ORBIT_TABLE.names() if k in table and k != "epoch"}
     try:
-        orbit = KeplerOrbit(**elements)
+        orbit = KeplerOrbit(mu=mu, **elements)
     except OrbitError as err:
         raise TorqueConfigError(err.reason, key=f"{key}.{err.key}") from None
     if "epoch" in table:
         if base_epoch is None:
             raise TorqueConfigError("an orbit epoch needs the scenario epoch "
                                     "(from_config(..., base_epoch=...))", key=f"{key}.epoch")
-        epoch = to_time(table["epoch"], scale=base_epoch.scale, key=f"{key}.epoch",
-                        error=TorqueConfigError)
-        dt = float((base_epoch - epoch).to_value(u.s))
+        dt = float((base_epoch - table["epoch"]).to_value(u.s))
         orbit = KeplerOrbit(orbit.mu, orbit.a, orbit.e, orbit.i, orbit.raan, orbit.argp,
                             orbit.mean_anomaly + orbit.mean_motion * dt)
     return orbit
@@ -1021,24 +997,12 @@ def _earth_rotation_angle(epoch) -> float:
 
 
 def _gravity_gradient(table, base_epoch):
-    _check_keys(table, ("type", "mu", "orbit"), "")
-    for key in ("mu", "orbit"):
-        if key not in table:
-            raise TorqueConfigError("missing: a gravity_gradient torque needs 'mu' and "
-                                    "'orbit'", key=key)
-    mu = _positive(table["mu"], "m3/s2", "mu")
+    mu = table["mu"]
     return GravityGradient(mu, _orbit_from_table(table["orbit"], mu, "orbit", base_epoch))
 
 
 def _constant(table, base_epoch):
-    _check_keys(table, ("type", "torque", "frame"), "")
-    if "torque" not in table:
-        raise TorqueConfigError("missing: give { value = [x, y, z], unit = "
-                                "\"N m\" }", key="torque")
-    frame = table.get("frame", "body")
-    if not isinstance(frame, str):
-        raise TorqueConfigError(f"expected 'body' or 'inertial', got {frame!r}", key="frame")
-    return ConstantTorque(table["torque"], frame=frame)
+    return ConstantTorque(table["torque"], frame=table.get("frame", "body"))
 
 
 def _dissipation(table, base_epoch):
@@ -1064,15 +1028,7 @@ def _prefixed(prefix: str, build: Callable, *args, **kwargs):
 
 def _field_from_table(table, base_epoch):
     field_table = table.get("field", {"model": "dipole"})
-    if not isinstance(field_table, Mapping):
-        raise TorqueConfigError("expected a table { model = \"dipole\", ... } or "
-                                "{ model = \"uniform\", vector = {...} }", key="field")
     model = field_table.get("model", "dipole")
-    if model not in _FIELD_KEYS:
-        near = difflib.get_close_matches(str(model), list(_FIELD_KEYS), n=1)
-        did = f"did you mean {near[0]!r}? " if near else ""
-        raise TorqueConfigError(f"unknown field model {model!r}; {did}choose "
-                                "'dipole' or 'uniform'", key="field.model")
     _check_keys(field_table, _FIELD_KEYS[model], "field")
     if model == "uniform":
         for key in ("orbit", "mu"):
@@ -1081,11 +1037,11 @@ def _field_from_table(table, base_epoch):
         if "vector" not in field_table:
             raise TorqueConfigError("missing: give { value = [x, y, z], "
                                     "unit = \"nT\" }", key="field.vector")
-        return UniformField(_quantity(field_table["vector"], "T", "field.vector", shape=(3,)))
+        return UniformField(field_table["vector"])
     if "orbit" not in table:
         raise TorqueConfigError("missing: the dipole field is evaluated along the "
                                 "body's orbit (or use field.model = \"uniform\")", key="orbit")
-    mu = _positive(table.get("mu", EARTH_MU), "m3/s2", "mu")
+    mu = table.get("mu", EARTH_MU)
     orbit = _orbit_from_table(table["orbit"], mu, "orbit", base_epoch)
     kwargs = {k: field_table[k] for k in _FIELD_KEYS["dipole"][1:] if k in field_table}
     if "rotation_angle" not in kwargs and base_epoch is not None:
@@ -1094,40 +1050,19 @@ def _field_from_table(table, base_epoch):
 
 
 def _eddy_current(table, base_epoch):
-    _check_keys(table, ("type", "magnetic_tensor", "shell", "sphere", "field", "mu",
-                        "orbit"), "")
-    given = [k for k in ("magnetic_tensor", "shell", "sphere") if k in table]
-    if len(given) != 1:
-        raise TorqueConfigError("give exactly one of 'magnetic_tensor' (S m4), 'shell' "
-                                "{radius, thickness, conductivity} or 'sphere' "
-                                "{radius, conductivity}",
-                                key=given[1] if len(given) > 1 else "magnetic_tensor")
     field = _field_from_table(table, base_epoch)
-    kind = given[0]
-    if kind == "magnetic_tensor":
+    if "magnetic_tensor" in table:
         return EddyCurrentDamping(table["magnetic_tensor"], field)
-    spec = table[kind]
-    if not isinstance(spec, Mapping):
-        raise TorqueConfigError("expected a table { radius = ..., conductivity = ... }", key=kind)
-    needed = ("radius", "thickness", "conductivity") if kind == "shell" else (
-        "radius", "conductivity")
-    _check_keys(spec, needed, kind)
-    for key in needed:
-        if key not in spec:
-            raise TorqueConfigError("missing", key=f"{kind}.{key}")
-    if kind == "shell":
-        return _prefixed(kind, EddyCurrentDamping.spherical_shell, spec["radius"],
+    if "shell" in table:
+        spec = table["shell"]
+        return _prefixed("shell", EddyCurrentDamping.spherical_shell, spec["radius"],
                          spec["thickness"], spec["conductivity"], field)
-    return _prefixed(kind, EddyCurrentDamping.solid_sphere, spec["radius"],
+    spec = table["sphere"]
+    return _prefixed("sphere", EddyCurrentDamping.solid_sphere, spec["radius"],
                      spec["conductivity"], field)
 
 
 def _heavy_top(table, base_epoch):
-    _check_keys(table, ("type", "mass", "pivot_to_com", "g", "up"), "")
-    if "pivot_to_com" not in table:
-        raise TorqueConfigError("missing: give the pivot -> centre of mass "
-                                "vector in the body frame, e.g. { value = "
-                                "[0, 0, 4], unit = \"cm\" }", key="pivot_to_com")
     kwargs = {k: table[k] for k in ("mass", "g", "up") if k in table}
     return HeavyTopPivot(pivot_to_com=table["pivot_to_com"], **kwargs)
 
@@ -1215,6 +1150,11 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
         did = f"did you mean {near[0]!r}? " if near else ""
         raise TorqueConfigError(f"unknown torque type {kind!r}; {did}choose one of "
                                 f"{', '.join(TORQUE_TYPES)}", key="type")
-    spec = TORQUE_TABLES[kind]
-    validate(table, spec.with_keys(Key("type", "string")), error=TorqueConfigError)
-    return TORQUE_TYPES[kind](table, base_epoch)
+    orbit = table.get("orbit")
+    if base_epoch is not None and isinstance(orbit, Mapping) and isinstance(
+            orbit.get("epoch"), str):     # an orbit epoch is read in the scenario's scale
+        table = {**table, "orbit": {**orbit, "epoch": {"value": orbit["epoch"],
+                                                       "scale": base_epoch.scale}}}
+    values = validate(table, TORQUE_TABLES[kind].with_keys(Key("type", "string")),
+                      error=TorqueConfigError)
+    return TORQUE_TYPES[kind](values, base_epoch)
