@@ -26,6 +26,7 @@ from .formats.aem import convert
 from .formats.spice import convert_to_ck
 from .plot import save_figures
 from .propagation.cluster import local_cluster
+from .propagation.events import event_table
 from .scenario import load_scenario, run_scenario
 from .statistics import classify_ensemble, regime_fractions
 from .version import __version__
@@ -154,6 +155,11 @@ def _summary_rows(result) -> list[tuple[str, str]]:
                  f"max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}; "
                  f"E0 = {d.kinetic_energy:.10g} J, max |E - E0|/E0 = "
                  f"{c['energy_rel_drift']:.2g}"))
+    if sc.events:
+        found = event_table(eph)
+        rows.append(("Events", f"{len(found)} found" + (": " + ", ".join(
+            f"{name} at {_format_seconds(t)}" for t, name in found[:5]) if found else "")
+            + (f", ... ({len(found) - 5} more in the ephemeris)" if len(found) > 5 else "")))
     return rows
 
 
