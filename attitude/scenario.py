@@ -41,8 +41,9 @@ from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
 from .sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
 from .sampling import MODELS
 from .scenario_spec import CONSERVATION_KEYS, EXPECT_KEYS, REDUCTIONS, SCENARIO
-from .spec import json_schema, markdown, validate
+from .spec import Key, Table, json_schema, markdown, validate
 from .state import AttitudeState, check_frame, spin_axis_quaternion
+from .tables import COLUMNS
 from .torques import from_config
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
@@ -845,7 +846,8 @@ def scenario_reference() -> str:
     >>> print(scenario_reference().splitlines()[0])
     ### `[scenario]`
     """
-    return markdown(SCENARIO)
+    columns = Table("", (Key("columns", "table", table=COLUMNS),))
+    return markdown(SCENARIO) + "\n" + markdown(columns)
 
 
 def _main(argv=None) -> int:

@@ -129,7 +129,7 @@ class Key:
         if kind == "quantity":
             shapes = _shapes(self.shape)
             text = "quantity" if shapes == [()] else "quantity " + " or ".join(
-                "scalar" if s == () else "x".join(map(str, s)) if s else "any shape"
+                "scalar" if s == () else "x".join(map(str, s)) if s else "array"
                 for s in shapes)
             text += f" ({self.unit or '1'})"
         elif kind == "unit":
@@ -179,6 +179,8 @@ class Table:
         ``(key, (others...))``: when ``key`` is given, the others may not be.
     open : bool
         Unknown keys allowed (checked by the loader).
+    title : str
+        Section title of the reference (default: ``[name]``).
 
     Examples
     --------
@@ -199,6 +201,7 @@ class Table:
     needs: tuple = ()
     excludes: tuple = ()
     open: bool = False
+    title: str = ""
     by_name: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -228,7 +231,7 @@ class Table:
         merged.update({k.name: k for k in keys})
         fields = {f: getattr(self, f) for f in ("name", "array_of_tables", "doc",
                                                   "exactly_one", "at_most_one", "needs",
-                                                  "excludes", "open")}
+                                                  "excludes", "open", "title")}
         fields.update(changes)
         return Table(keys=tuple(merged.values()), **fields)
 
@@ -652,7 +655,7 @@ def markdown(table: Table, *, level: int = 3) -> str:
                 title = f"`[[{key.name}]]`" + (f" with `{key.discriminator} = \"{sub.name}\"`"
                                               if key.variants else "")
             else:
-                title = f"`[{key.name}]`"
+                title = sub.title or f"`[{key.name}]`"
             lines = [f"{'#' * level} {title}", ""]
             doc = sub.doc or key.doc
             if doc:
