@@ -124,8 +124,8 @@ def read_unit(text, *, key=None, like=None, error=QuantityError) -> u.UnitBase:
         else:
             unit_c = unit
         if not unit_c.is_equivalent(target, equivalencies=_equivalencies(target)):
-            raise error(f"unit '{text}' cannot be converted to '{target}' (expected "
-                        f"{_kind(target)})", key=key)
+            raise error(f"unit '{text}' cannot be converted to '{_u(target)}' ({_not(target)})",
+                        key=key)
     return unit
 
 
@@ -147,6 +147,14 @@ def _kind(unit: u.UnitBase) -> str:
 def _u(unit) -> str:
     """A unit for messages: ``"1"`` for a pure number."""
     return str(unit) or "1"
+
+
+def _not(unit: u.UnitBase) -> str:
+    """``"not a time unit"``, ``"not a pure number"``, ... for messages."""
+    kind = _kind(unit)
+    if kind.startswith("in "):
+        return f"not a unit of {unit}"
+    return f"not {kind}" + ("" if kind == "a pure number" else " unit")
 
 
 def _hint(unit: u.UnitBase) -> str:
@@ -266,8 +274,8 @@ def to_si(value, unit, *, key: str | None = None, shape=None, positive: bool = F
     try:
         out = (q.value * source).to_value(target, equivalencies=_equivalencies(target))
     except u.UnitConversionError:
-        raise error(f"unit '{q.unit}' cannot be converted to '{target}' (expected "
-                    f"{_kind(target)}); write e.g. '{_hint(target)}'", key=key) from None
+        raise error(f"unit '{q.unit}' cannot be converted to '{_u(target)}' ({_not(target)}); "
+                    f"write e.g. '{_hint(target)}'", key=key) from None
     out = np.array(out, dtype=float)
     _check(out, target, key, error, shape=shape, positive=positive,
            nonnegative=nonnegative, finite=finite, bounds=bounds)

@@ -47,7 +47,7 @@ def elapsed_seconds(times, epoch: Time) -> np.ndarray:
         # difference taken in the epoch's scale: seconds of TDB, not of TT, for a TDB epoch
         t = (getattr(times, epoch.scale) - epoch).to_value(u.s)
     else:   # seconds, a time Quantity, "30 min", {value, unit}: the one quantity reader
-        t = to_si(times, "s", key="times", error=InvalidStateError)
+        t = to_si(times, "s", key="times", finite=False, error=InvalidStateError)
     t = np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1:
         raise InvalidStateError(f"times: expected a 1-D array, got shape {t.shape}")
