@@ -92,6 +92,9 @@ class Key:
         The key that chooses the variant (default ``"type"``).
     nonempty : bool
         A ``"map"`` needs at least one entry.
+    schema : dict, optional
+        The JSON Schema of the value, for a key of kind ``"any"`` whose forms the loader
+        checks itself (e.g. an array of numbers or a ``{min, max, count}`` table).
     scale_key : str
         For ``"time"`` keys: the sibling key holding the time scale (default
         ``"time_scale"``; ``"tdb"`` when absent).
@@ -118,6 +121,7 @@ class Key:
     discriminator: str = "type"
     scale_key: str = "time_scale"
     nonempty: bool = False
+    schema: dict | None = None
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -543,6 +547,8 @@ def _key_schema(key: Key) -> dict:
         out = {"type": "array", "items": items}
     else:
         out = {}
+    if key.schema is not None:
+        out = dict(key.schema)
     doc = key.doc
     if key.unit is not None and kind == "quantity":
         doc = (doc + "; " if doc else "") + f"in {key.unit or '1'}: {_QUANTITY_DOC}"

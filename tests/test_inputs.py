@@ -422,7 +422,7 @@ toml_values = st.recursive(
     max_leaves=6)
 
 
-@settings(max_examples=60, deadline=None, derandomize=True, database=None,
+@settings(max_examples=40, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture,
                                  HealthCheck.too_slow])
 @given(name=st.sampled_from(sorted(SHORT)), data=st.data())
