@@ -22,8 +22,8 @@ from .spec import Key, Table
 __all__ = ["ensemble_columns", "read_table", "COLUMNS"]
 
 _MOMENT = "kg m2"
-#: The columns of a table of bodies: SI unit of each (a header may give another unit of the
-#: same dimension in brackets, ``wx [deg/s]``); other columns are ignored.
+#: The columns of a table of bodies and the SI unit of each.  A header may give another
+#: unit of the same dimension in brackets (``wx [deg/s]``); other columns are ignored.
 COLUMNS = Table("columns", (
     *(Key(k, "quantity", unit=_MOMENT, shape=None, doc=f"principal moment {k}")
       for k in "ABC"),
