@@ -91,7 +91,8 @@ def _copy(a) -> np.ndarray:
 
 
 def _vector(value, unit: str, name: str) -> np.ndarray:
-    v = np.asarray(to_si(value, unit, name=name, error=InvalidInertiaError), dtype=float)
+    v = np.asarray(to_si(value, unit, name=name, finite=False,
+                         error=InvalidInertiaError), dtype=float)
     if v.shape != (3,):
         raise InvalidInertiaError(f"{name}: expected 3 components, got shape {v.shape}")
     if not np.all(np.isfinite(v)):
@@ -100,7 +101,7 @@ def _vector(value, unit: str, name: str) -> np.ndarray:
 
 
 def _positive(value, unit: str, name: str, *, allow_zero: bool = False) -> float:
-    x = to_si(value, unit, name=name, error=InvalidInertiaError)
+    x = to_si(value, unit, name=name, finite=False, error=InvalidInertiaError)
     if np.ndim(x) != 0:
         raise InvalidInertiaError(f"{name}: expected a scalar, got shape {np.shape(x)}")
     x = float(x)
@@ -112,8 +113,8 @@ def _positive(value, unit: str, name: str, *, allow_zero: bool = False) -> float
 
 def _tensor(value, name: str = "inertia") -> np.ndarray:
     """Convert, check shape, finiteness and symmetry; return the symmetrised tensor."""
-    inertia = np.asarray(to_si(value, "kg m2", name=name, error=InvalidInertiaError),
-                         dtype=float)
+    inertia = np.asarray(to_si(value, "kg m2", name=name, finite=False,
+                               error=InvalidInertiaError))
     if inertia.shape != (3, 3):
         raise InvalidInertiaError(f"{name}: expected a 3x3 tensor, got shape {inertia.shape}")
     invalid = _tensor_problems(inertia[None], name)

@@ -27,7 +27,6 @@ import re
 from dataclasses import dataclass, field
 
 import numpy as np
-from astropy import units as u
 from scipy.spatial.transform import Rotation
 from scipy.special import ndtr
 
@@ -47,6 +46,7 @@ from .diagnostics import (
 from .ephemeris import Ephemeris
 from .errors import ClassificationError
 from .lyapunov import LyapunovResult, lyapunov_exponent
+from .quantities import to_si
 from .regimes import PERIOD_KEYS, REGIMES, Thresholds
 from .state import AttitudeState
 
@@ -587,14 +587,8 @@ def classify(eph: Ephemeris, *, window=None, body_index: int | None = None,
     if window is None:
         length = _window_length(series, q, th)
     else:
-        try:
-            length = float(u.Quantity(window, u.s).to_value(u.s)) if isinstance(
-                window, (str, u.Quantity)) else float(window)
-        except (TypeError, ValueError, u.UnitsError) as exc:
-            raise ClassificationError(f"window: expected seconds or a time Quantity, got "
-                                      f"{window!r} ({exc})") from None
-        if not length > 0:
-            raise ClassificationError(f"window must be > 0 s, got {window!r}")
+        length = to_si(window, "s", key="window", shape=(), positive=True,
+                       error=ClassificationError)
     wins, length = _windows(t, length, th)
     moments = tuple(float(x) for x in series.moments)
     results = [_judge(q, w, th, moments) for w in wins]

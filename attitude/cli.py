@@ -1,7 +1,9 @@
 """The ``attitude`` command.
 
 Exit codes: 0 success, 1 an expectation failed, 2 bad input (malformed or non-physical
-scenario, unreadable file), 3 the propagation itself failed.
+scenario, unreadable file: one line ``attitude: error: FILE: KEY: message``, never a
+traceback), 3 the propagation itself failed (or an internal error: one line, the traceback
+with ``ATTITUDE_DEBUG=1``).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import os
 import sys
 import time
 import tomllib
+import traceback
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -26,6 +29,7 @@ from .photometry.config import run_lightcurve  # photometry (issue 15)
 from .photometry.plot import save_lightcurve_figures  # photometry (issue 15)
 from .plot import save_figures
 from .propagation.cluster import local_cluster
+from .propagation.events import event_table
 from .scenario import load_scenario, run_scenario
 from .spinorbit import section as spinorbit_section  # attitude section (spin-orbit wing)
 from .statistics import classify_ensemble, regime_fractions
@@ -155,6 +159,11 @@ def _summary_rows(result) -> list[tuple[str, str]]:
                  f"max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}; "
                  f"E0 = {d.kinetic_energy:.10g} J, max |E - E0|/E0 = "
                  f"{c['energy_rel_drift']:.2g}"))
+    if sc.events:
+        found = event_table(eph)
+        rows.append(("Events", f"{len(found)} found" + (": " + ", ".join(
+            f"{name} at {_format_seconds(t)}" for t, name in found[:5]) if found else "")
+            + (f", ... ({len(found) - 5} more in the ephemeris)" if len(found) > 5 else "")))
     return rows
 
 
@@ -333,11 +342,12 @@ def _check_one(path: str) -> dict:
         result = run_scenario(load_scenario(path), write_outputs=False)
     except PropagationError as exc:
         out.update(status="propagation", message=str(exc))
-    except (AttitudeError, OSError, ValueError) as exc:
-        out.update(status="input", message=str(exc))
+    except (AttitudeError, OSError) as exc:
+        out.update(status="input", message=_one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a bug: report it, keep checking the others
         out.update(status="propagation",
-                   message=f"{path}: internal error: {type(exc).__name__}: {exc}")
+                   message=f"{path}: internal error: {type(exc).__name__}: "
+                           f"{_one_line(exc)}")
     else:
         out["name"] = result.scenario.name
         out["expect"] = [{k: v for k, v in e.items()} for e in result.expectations]
@@ -679,23 +689,70 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line(text: str) -> str:
+    """``text`` on one line (messages quoting other tools may hold newlines)."""
+    return " ".join(str(text).split())
+
+
+def _file_of(args) -> str | None:
+    """The input file of the command, to name it in errors that do not."""
+    for name in ("scenario", "ephemeris", "input"):
+        value = getattr(args, name, None)
+        if value:
+            return str(value)
+    return None
+
+
+def _error_line(exc: Exception, file: str | None) -> str:
+    """``attitude: error: FILE: KEY: message`` for an :class:`AttitudeError`."""
+    text = _one_line(exc)
+    if isinstance(exc, AttitudeError) and exc.path is None and file and not text.startswith(
+            file):
+        text = f"{file}: {text}"
+    return f"attitude: error: {text}"
+
+
 def main(argv: list[str] | None = None) -> int:
+    """The ``attitude`` command: parse ``argv`` (default ``sys.argv[1:]``), run the
+    subcommand and return its exit code.
+
+    Exit codes (docs/scenarios.md): 0 success, 1 an expectation failed, 2 bad input (one
+    line ``attitude: error: FILE: KEY: message`` on stderr, never a traceback), 3 the
+    propagation failed, or an internal error (one line; the traceback with
+    ``ATTITUDE_DEBUG=1``).
+
+    Examples
+    --------
+    >>> main(["check", "scenarios/apophis.toml", "--jobs", "1"])  # doctest: +ELLIPSIS
+    pass  scenarios/apophis.toml  regime: expected SAM, got SAM
+    ...
+    0
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return EXIT_INPUT
+    file = _file_of(args)
     try:
         return args.func(args)
     except PropagationError as exc:
-        print(f"attitude: error: {exc}", file=sys.stderr)
+        print(_error_line(exc, file), file=sys.stderr)
         return EXIT_PROPAGATION
     except AttitudeError as exc:
-        print(f"attitude: error: {exc}", file=sys.stderr)
+        print(_error_line(exc, file), file=sys.stderr)
         return EXIT_INPUT
     except OSError as exc:
-        print(f"attitude: error: {exc.filename or ''}: {exc.strerror}", file=sys.stderr)
+        where = exc.filename or file or ""
+        print(f"attitude: error: {where}: {_one_line(exc.strerror or exc)}", file=sys.stderr)
         return EXIT_INPUT
+    except Exception as exc:  # noqa: BLE001 - a bug: one line, the traceback on request
+        if os.environ.get("ATTITUDE_DEBUG", "") not in ("", "0"):
+            traceback.print_exc()
+        print(f"attitude: error: {file or 'attitude'}: internal error: "
+              f"{type(exc).__name__}: {_one_line(exc)} (please report it; ATTITUDE_DEBUG=1 "
+              "shows the traceback)", file=sys.stderr)
+        return EXIT_PROPAGATION
 
 
 if __name__ == "__main__":  # pragma: no cover

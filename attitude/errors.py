@@ -24,6 +24,7 @@ __all__ = [
     "InvalidStateError",
     "ShapeModelError",
     "ScenarioError",
+    "QuantityError",
     "PropagationError",
     "EphemerisFormatError",
     "OrbitError",
@@ -89,6 +90,13 @@ class ShapeModelError(AttitudeError, ValueError):
 class ScenarioError(AttitudeError, ValueError):
     """A malformed or non-physical scenario file.  ``str(err)`` is one line that
     names the file and the key."""
+
+
+class QuantityError(AttitudeError, ValueError):
+    """A number with a unit that cannot be read: unparseable text, a unit of the wrong
+    dimension, the wrong shape, a non-finite or out-of-range value, a date that does not
+    exist.  ``key`` names the field (``"propagation.step"``); the message says what was
+    expected and how to write it (:func:`attitude.quantities.to_si`)."""
 
 
 class PropagationError(AttitudeError, RuntimeError):

@@ -16,7 +16,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from astropy import units as u
 from scipy.spatial.transform import Rotation
 
 from . import torques as tq
@@ -24,6 +23,7 @@ from .body import RigidBody
 from .errors import ClassificationError
 from .orbit import KeplerOrbit
 from .propagation.propagator import propagate
+from .quantities import to_si
 from .regimes import Thresholds
 from .state import AttitudeState
 
@@ -259,11 +259,8 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
     True
     """
     th = thresholds or Thresholds()
-    if isinstance(duration, (str, u.Quantity)):
-        duration = u.Quantity(duration, u.s).to_value(u.s)
-    duration = float(duration)
-    if not (duration > 0 and math.isfinite(duration)):
-        raise ClassificationError(f"duration must be > 0 s, got {duration!r}")
+    duration = to_si(duration, "s", key="duration", shape=(), positive=True,
+                     error=ClassificationError)
     if int(intervals) < 2:
         raise ClassificationError(f"intervals must be >= 2, got {intervals!r}")
     if not 0 < separation < 1e-2:

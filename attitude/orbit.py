@@ -223,16 +223,9 @@ def _solve_kepler_scalar(M: float, e: float, max_iter: int) -> float:
 # --- Keplerian orbit -------------------------------------------------------------------
 
 
-class _Plain(ValueError):
-    pass
-
-
 def _si(value, unit: str, key: str):
     """``to_si`` raising :class:`OrbitError` whose key is ``key``."""
-    try:
-        return to_si(value, unit, name=key, error=_Plain)
-    except _Plain as exc:
-        raise OrbitError(str(exc).removeprefix(f"{key}: "), key=key) from None
+    return to_si(value, unit, key=key, error=OrbitError)
 
 
 def _check_angle(value, key: str) -> float:

@@ -107,10 +107,11 @@ class Ensemble:
         if on_invalid not in ("report", "raise"):
             raise InvalidStateError(f"on_invalid: expected 'report' or 'raise', got "
                                     f"{on_invalid!r}")
-        inertia = np.array(to_si(inertia, "kg m2", name="inertia", error=InvalidInertiaError),
+        inertia = np.array(to_si(inertia, "kg m2", name="inertia", finite=False,
+                                 error=InvalidInertiaError),
                            dtype=float, ndmin=3)
         quaternion = np.array(quaternion, dtype=float, ndmin=2)
-        omega = np.array(to_si(omega_body, "rad/s", name="omega_body",
+        omega = np.array(to_si(omega_body, "rad/s", name="omega_body", finite=False,
                                error=InvalidStateError), dtype=float, ndmin=2)
         n = inertia.shape[0]
         for name, arr, shape in (("inertia", inertia, (n, 3, 3)),
@@ -125,7 +126,7 @@ class Ensemble:
         if len(names) != n:
             raise InvalidStateError(f"names: expected {n} names, got {len(names)}")
         mass = np.full(n, np.nan) if mass is None else np.array(to_si(
-            mass, "kg", name="mass", error=InvalidInertiaError), dtype=float, ndmin=1)
+            mass, "kg", name="mass", finite=False, error=InvalidInertiaError), dtype=float, ndmin=1)
         if mass.shape != (n,):
             raise InvalidInertiaError(f"mass: expected {n} masses, got shape {mass.shape}")
         checked, moments, b2p = _check_rows(inertia, quaternion, omega)
@@ -170,12 +171,12 @@ class Ensemble:
                                       "principal_moments= (N, 3)")
         if principal_moments is not None:
             m = np.array(to_si(principal_moments, "kg m2", name="principal_moments",
-                               error=InvalidInertiaError), dtype=float, ndmin=2)
+                               finite=False, error=InvalidInertiaError), dtype=float, ndmin=2)
             if m.ndim != 2 or m.shape[1] != 3:
                 raise InvalidInertiaError(f"principal_moments: expected shape (N, 3), got "
                                           f"{m.shape}")
             inertia = diagonal_inertia(m)
-        omega = np.array(to_si(omega_body, "rad/s", name="omega_body",
+        omega = np.array(to_si(omega_body, "rad/s", name="omega_body", finite=False,
                                error=InvalidStateError), dtype=float, ndmin=2)
         if quaternion is None:
             quaternion = np.tile([0.0, 0.0, 0.0, 1.0], (omega.shape[0], 1))

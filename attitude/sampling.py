@@ -153,7 +153,7 @@ def _parameters_si(values: Mapping, spec: Mapping, what: str, *,
             raise InvalidStateError(f"{what}.{k}: unknown parameter{hint} (known: "
                                     f"{', '.join(spec)})")
         x = to_si(v, spec[k] or u.dimensionless_unscaled, name=f"{what}.{k}",
-                  error=InvalidStateError)
+                  finite=False, error=InvalidStateError)   # NaN: an invalid body
         out[k] = np.asarray(x, dtype=float) if arrays else float(np.asarray(x))
     return out
 

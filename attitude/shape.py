@@ -37,6 +37,7 @@ import astropy.units as u
 import numpy as np
 
 from attitude.errors import InvalidInertiaError, ShapeModelError
+from attitude.quantities import read_unit, to_si
 
 __all__ = ["Polyhedron"]
 
@@ -704,54 +705,27 @@ def _check_topology(faces: np.ndarray, n_vertices: int) -> None:
 
 # ---------------------------------------------------------------------------- units
 def _metres_per_unit(length_unit) -> float:
-    try:
-        if isinstance(length_unit, str):
-            try:
-                quantity = u.Quantity(1.0, u.Unit(length_unit))
-            except ValueError:
-                quantity = u.Quantity(length_unit)  # "0.5 km"
-        elif isinstance(length_unit, u.Quantity):
-            quantity = length_unit
-        elif isinstance(length_unit, u.UnitBase):
-            quantity = u.Quantity(1.0, length_unit)
+    """Metres per coordinate unit: a unit (``"km"``, ``u.km``) or a length (``"0.5 km"``),
+    read by :func:`attitude.quantities.to_si`."""
+    if isinstance(length_unit, (str, u.UnitBase)):
+        try:
+            length_unit = read_unit(length_unit, key="length_unit", error=ShapeModelError)
+        except ShapeModelError:
+            if not isinstance(length_unit, str):
+                raise
         else:
-            raise TypeError(f"expected a str, astropy Unit or Quantity, got {type(length_unit)}")
-        factor = quantity.to_value(u.m)
-    except (TypeError, ValueError, u.UnitsError) as err:
-        raise ShapeModelError(
-            f"length_unit {length_unit!r} is not a length ({err}); "
-            'use e.g. "m", "km" or astropy.units.km'
-        ) from None
-    if np.ndim(factor) != 0 or not (np.isfinite(factor) and factor > 0):
-        raise ShapeModelError(
-            f"length_unit {length_unit!r} must be a positive, finite scalar length"
-        )
-    return float(factor)
+            length_unit = 1.0 * length_unit
+    if not isinstance(length_unit, (str, u.Quantity)):
+        raise ShapeModelError(f"expected a unit such as \"km\", an astropy unit or a "
+                              f"length Quantity, got {length_unit!r}", key="length_unit")
+    return to_si(length_unit, "m", key="length_unit", shape=(), positive=True,
+                 error=ShapeModelError)
 
 
 def _density_si(density) -> float:
-    if isinstance(density, (bool, np.bool_)):
-        raise InvalidInertiaError(f"density must be a number or a Quantity, got {density!r}")
-    try:
-        if isinstance(density, str):
-            density = u.Quantity(density)
-        if isinstance(density, u.Quantity):
-            value = density.to_value(u.kg / u.m**3)
-        else:
-            value = np.asarray(density, dtype=np.float64)
-    except (TypeError, ValueError, u.UnitsError) as err:
-        raise InvalidInertiaError(
-            f"density {density!r} is not a mass density ({err}); give kg/m^3 as a float "
-            'or a Quantity such as "2.6 g/cm3"'
-        ) from None
-    if np.ndim(value) != 0:
-        raise InvalidInertiaError(f"density must be a scalar, got shape {np.shape(value)}")
-    value = float(value)
-    if not (np.isfinite(value) and value > 0.0):
-        raise InvalidInertiaError(
-            f"density must be positive and finite, got {density!r} ({value} kg/m^3)"
-        )
-    return value
+    """Bulk density in kg/m^3 (a float, a Quantity or ``"2.6 g/cm3"``)."""
+    return to_si(density, "kg/m3", key="density", shape=(), positive=True,
+                 error=InvalidInertiaError)
 
 
 # ---------------------------------------------------------------------------- OBJ

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from .body import RigidBody
 from .errors import InvalidStateError
-from .quantities import to_si
+from .quantities import to_si, to_time
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
            "direction_frame", "spin_axis_quaternion", "stack_states", "format_epoch"]
@@ -53,12 +54,9 @@ def check_frame(frame: str, *, error=InvalidStateError) -> str:
 
 def as_epoch(epoch, *, error=InvalidStateError) -> Time:
     """A scalar astropy Time; strings are parsed in :data:`DEFAULT_TIME_SCALE`."""
-    if isinstance(epoch, str):
-        try:
-            epoch = Time(epoch, scale=DEFAULT_TIME_SCALE)
-        except ValueError as exc:
-            raise error(f"epoch: cannot parse {epoch!r} as a time ({exc}); use ISO 8601 "
-                        "such as '2029-04-13T00:00:00'") from None
+    if isinstance(epoch, (str, Mapping)):
+        epoch = to_time(epoch, scale=DEFAULT_TIME_SCALE, key="epoch", error=error,
+                        precision=None)
     if not isinstance(epoch, Time):
         raise error(f"epoch: expected an astropy Time or an ISO 8601 string, got {epoch!r}")
     if not epoch.isscalar:
@@ -104,7 +102,7 @@ def format_epoch(time: Time, digits: int = 9) -> str | np.ndarray:
 
 def as_omega(omega, *, name: str = "omega_body", error=InvalidStateError) -> np.ndarray:
     """Angular velocity in rad/s from floats (rad/s), a Quantity or a string."""
-    w = np.array(to_si(omega, "rad/s", name=name, error=error), dtype=float)  # a copy
+    w = np.array(to_si(omega, "rad/s", name=name, finite=False, error=error), dtype=float)  # a copy
     if w.shape != (3,):
         raise error(f"{name}: expected 3 components, got shape {w.shape}")
     if not np.all(np.isfinite(w)):

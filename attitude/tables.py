@@ -13,13 +13,32 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from astropy import units as u
 
 from .body import diagonal_inertia
 from .errors import InvalidInertiaError, InvalidStateError
 from .quantities import to_si
+from .spec import Key, Table
 
-__all__ = ["ensemble_columns", "read_table"]
+__all__ = ["ensemble_columns", "read_table", "COLUMNS"]
+
+_MOMENT = "kg m2"
+#: The columns of a table of bodies and the SI unit of each.  A header may give another
+#: unit of the same dimension in brackets (``wx [deg/s]``); other columns are ignored.
+COLUMNS = Table("columns", (
+    *(Key(k, "quantity", unit=_MOMENT, shape=None, doc=f"principal moment {k}")
+      for k in "ABC"),
+    *(Key(k, "quantity", unit=_MOMENT, shape=None,
+          doc="inertia tensor, body frame" + ("" if k[1] == k[2] else "; default 0"))
+      for k in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")),
+    *(Key(k, "quantity", unit="", shape=None,
+          doc="attitude quaternion, body -> inertial, scalar last; default identity")
+      for k in ("qx", "qy", "qz", "qw")),
+    *(Key(k, "quantity", unit="rad/s", shape=None, required=True,
+          doc="body-frame angular velocity") for k in ("wx", "wy", "wz")),
+    Key("name", "string", doc="label of the body"),
+), open=True, title="Columns of an `[ensemble] table`",
+    doc="One row per body: A, B, C or Ixx, Iyy, Izz (with Ixy, Ixz, Iyz); rows that are "
+        "not physical (or hold NaN) are reported by index and propagated as NaN.")
 
 
 def ensemble_columns(table):
@@ -36,12 +55,12 @@ def ensemble_columns(table):
     columns = read_table(table)
     get = _column_getter(columns)
     if all(k in columns for k in ("A", "B", "C")):
-        inertia = diagonal_inertia(np.column_stack([get(k, "kg m2") for k in ("A", "B", "C")]))
+        inertia = diagonal_inertia(np.column_stack([get(k) for k in ("A", "B", "C")]))
         n = inertia.shape[0]
     elif all(k in columns for k in ("Ixx", "Iyy", "Izz")):
-        xx, yy, zz = (get(k, "kg m2") for k in ("Ixx", "Iyy", "Izz"))
+        xx, yy, zz = (get(k) for k in ("Ixx", "Iyy", "Izz"))
         n = xx.size
-        xy, xz, yz = (get(k, "kg m2") if k in columns else np.zeros(n)
+        xy, xz, yz = (get(k) if k in columns else np.zeros(n)
                       for k in ("Ixy", "Ixz", "Iyz"))
         inertia = np.stack([np.column_stack(r) for r in
                             ((xx, xy, xz), (xy, yy, yz), (xz, yz, zz))], axis=1)
@@ -53,9 +72,9 @@ def ensemble_columns(table):
     if missing:
         raise InvalidStateError(f"table: missing rate column(s) {', '.join(missing)} "
                                 "(body-frame angular velocity, rad/s)")
-    omega = np.column_stack([get(k, "rad/s") for k in ("wx", "wy", "wz")])
+    omega = np.column_stack([get(k) for k in ("wx", "wy", "wz")])
     if all(k in columns for k in ("qx", "qy", "qz", "qw")):
-        q = np.column_stack([get(k, "") for k in ("qx", "qy", "qz", "qw")])
+        q = np.column_stack([get(k) for k in ("qx", "qy", "qz", "qw")])
     else:
         q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
     names = [str(x) for x in columns["name"][1]] if "name" in columns else None
@@ -109,21 +128,19 @@ def read_table(table) -> dict[str, tuple[str, np.ndarray]]:
 
 def _column_getter(columns):
     """``get(name, si_unit)``: a column as SI floats (its header unit converted)."""
-    def get(name, si):
+    def get(name):
+        si = COLUMNS[name].unit
         unit, values = columns[name]
         try:
             values = np.asarray(values, dtype=float)
         except (TypeError, ValueError):
-            raise InvalidStateError(f"table column {name}: expected numbers") from None
-        if not unit:
-            return values
-        try:
-            values = values * u.Unit(unit)
-        except ValueError:
-            raise InvalidStateError(f"table column {name}: cannot parse the unit "
-                                    f"[{unit}]") from None
-        return to_si(values, si or u.dimensionless_unscaled, name=f"table column {name}",
-                     error=InvalidStateError)
+            raise InvalidStateError(f"expected numbers, got {list(values)[:3]!r}...",
+                                    key=f"column {name}") from None
+        if values.size == 0:
+            raise InvalidStateError("the table has no rows", key=f"column {name}")
+        # NaN rows are kept: they become invalid bodies, reported by index
+        return to_si({"value": values, "unit": unit or si}, si, key=f"column {name}",
+                     finite=False, error=InvalidStateError)
 
     return get
 

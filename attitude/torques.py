@@ -56,14 +56,14 @@ from collections.abc import Callable, Mapping, Sequence
 import erfa
 import numpy as np
 from astropy import units as u
-from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 from . import quaternion as quat
 from .body import SYMMETRY_RTOL, RigidBody
 from .errors import OrbitError, TorqueConfigError
 from .orbit import KeplerOrbit, as_path
-from .quantities import parse_quantity
+from .quantities import to_si
+from .spec import SYNONYMS, Key, Table, validate
 
 __all__ = [
     "TorqueModel",
@@ -179,58 +179,20 @@ def _matvec(inertia: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _quantity(value, unit: str, key: str, *, shape: tuple | None = ()):
-    """A number (SI), a string parsed by astropy, a Quantity, or ``{value, unit}``."""
-    target = u.Unit(unit)
-    if isinstance(value, bool) or value is None:
-        raise TorqueConfigError(f"expected a quantity in {target}, got {value!r}", key=key)
-    if isinstance(value, Mapping):
-        _check_keys(value, ("value", "unit"), key)
-        if "value" not in value or "unit" not in value:
-            raise TorqueConfigError("a quantity table needs both 'value' and 'unit'", key=key)
-        try:
-            q = u.Quantity(value["value"], u.Unit(value["unit"]), dtype=float)
-        except (ValueError, TypeError) as exc:
-            raise TorqueConfigError(f"cannot read {dict(value)!r} as a quantity "
-                                    f"({exc})", key=key) from None
-    elif isinstance(value, str):
-        try:
-            q = parse_quantity(value)
-        except (ValueError, TypeError):
-            raise TorqueConfigError(f"cannot parse {value!r} as a quantity; write a "
-                                    f"number and a unit such as '1.5 {target}'", key=key) from None
-    elif isinstance(value, u.Quantity):
-        q = value
-    else:
-        try:
-            q = np.asarray(value, dtype=float) * target
-        except (ValueError, TypeError):
-            raise TorqueConfigError(f"expected a number or a quantity in {target}, "
-                                    f"got {value!r}", key=key) from None
-    try:
-        equiv = u.dimensionless_angles() if target.physical_type != "dimensionless" else []
-        out = np.asarray(q.to_value(target, equivalencies=equiv), dtype=float)
-    except u.UnitConversionError:
-        raise TorqueConfigError(f"unit '{q.unit}' cannot be converted to "
-                                f"'{target}'", key=key) from None
-    if shape is not None and out.shape != shape:
-        raise TorqueConfigError(f"expected shape {shape}, got {out.shape}", key=key)
-    if not np.all(np.isfinite(out)):
-        raise TorqueConfigError(f"every value must be finite, got {out.tolist()}", key=key)
-    return float(out) if out.ndim == 0 else out
+    """A number (SI), a string parsed by astropy, a Quantity, or ``{value, unit}``
+    (:func:`attitude.quantities.to_si`, raising :class:`TorqueConfigError`)."""
+    return to_si(value, unit, key=key, shape=shape, error=TorqueConfigError)
 
 
 def _positive(value, unit: str, key: str) -> float:
-    x = _quantity(value, unit, key)
-    if not x > 0:
-        raise TorqueConfigError(f"must be positive, got {x!r} {u.Unit(unit)}", key=key)
-    return x
+    return to_si(value, unit, key=key, shape=(), positive=True, error=TorqueConfigError)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
     for key in table:
         if key not in allowed:
             path = f"{where}.{key}" if where else str(key)
-            hint = _SYNONYMS.get(str(key).lower())
+            hint = SYNONYMS.get(str(key).lower())
             if hint not in allowed:
                 near = difflib.get_close_matches(str(key), list(allowed), n=1)
                 hint = near[0] if near else None
@@ -239,15 +201,6 @@ def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
                                     f"{', '.join(allowed)}", key=path)
 
 
-_SYNONYMS = {
-    "eccentricity": "e", "inclination": "i", "semi_major_axis": "a", "semimajor_axis": "a",
-    "sma": "a", "right_ascension": "raan", "node": "raan", "omega": "argp",
-    "argument_of_periapsis": "argp", "argument_of_perigee": "argp", "arg_periapsis": "argp",
-    "m0": "mean_anomaly", "m": "mean_anomaly", "tau": "time_constant",
-    "timescale": "time_constant", "gm": "mu", "vector": "torque", "value": "torque",
-    "conductivity_tensor": "magnetic_tensor", "tensor": "magnetic_tensor", "l": "pivot_to_com",
-    "com": "pivot_to_com", "gravity": "g",
-}
 
 
 # --- the protocol --------------------------------------------------------------------
@@ -927,37 +880,88 @@ class HeavyTopPivot(TorqueModel):
 
 # --- scenario tables -------------------------------------------------------------------
 
-_ORBIT_KEYS = ("a", "e", "i", "raan", "argp", "mean_anomaly", "epoch")
+#: An inline orbit table ``orbit = { a = "7000 km", e = 0.0, ... }``.
+ORBIT_TABLE = Table("orbit", (
+    Key("a", "quantity", unit="m", required=True, positive=True, doc="semi-major axis"),
+    Key("e", "quantity", unit="", bounds=(0.0, None), default=0,
+        doc="eccentricity, 0 <= e < 1"),
+    Key("i", "quantity", unit="rad", default=0, doc="inclination"),
+    Key("raan", "quantity", unit="rad", default=0,
+        doc="right ascension of the ascending node"),
+    Key("argp", "quantity", unit="rad", default=0, doc="argument of periapsis"),
+    Key("mean_anomaly", "quantity", unit="rad", default=0, doc="mean anomaly at `epoch`"),
+    Key("epoch", "time", doc="when `mean_anomaly` holds; default the scenario epoch"),
+), doc="Keplerian elements of the body's orbit about the primary, inertial frame")
 
+_FIELD_TABLE = Table("field", (
+    Key("model", "string", choices=("dipole", "uniform"), default="dipole",
+        doc="the Earth's tilted dipole along `orbit`, or a uniform field"),
+    Key("moment", "quantity", unit="A m2", positive=True, doc="dipole moment"),
+    Key("tilt", "quantity", unit="rad", doc="dipole tilt from the inertial z axis"),
+    Key("pole_longitude", "quantity", unit="rad", doc="longitude of the dipole pole"),
+    Key("rotation_angle", "quantity", unit="rad",
+        doc="Earth rotation angle at t = 0; default from the scenario epoch"),
+    Key("rotation_rate", "quantity", unit="rad/s", doc="Earth rotation rate"),
+    Key("vector", "quantity", unit="T", shape=(3,), doc="uniform field, inertial frame"),
+), excludes=(("vector", ("moment", "tilt", "pole_longitude", "rotation_angle",
+                          "rotation_rate")),))
+
+#: The keys of each ``[[torques]]`` type (``type`` selects the table).
+TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
+    Table("gravity_gradient", (
+        Key("mu", "quantity", unit="m3/s2", required=True, positive=True,
+            doc="gravitational parameter of the primary"),
+        Key("orbit", "table", required=True, table=ORBIT_TABLE, doc=ORBIT_TABLE.doc),
+    ), doc="Point-mass primary: `3 mu / r^5 (r x I r)`."),
+    Table("constant", (
+        Key("torque", "quantity", unit="N m", shape=(3,), required=True, doc="the torque"),
+        Key("frame", "string", choices=("body", "inertial"), default="body",
+            doc="axes of `torque`"),
+    ), doc="A fixed torque in body or inertial axes."),
+    Table("dissipation", (
+        Key("time_constant", "quantity", unit="s", required=True, positive=True,
+            doc="e-folding time of the excess energy"),
+    ), doc="Internal energy dissipation (damper, fuel slosh); the inertial L is kept."),
+    Table("eddy_current", (
+        Key("magnetic_tensor", "quantity", unit="S m4", shape=((), (3, 3)),
+            doc="magnetic tensor, body frame (scalar: isotropic)"),
+        Key("shell", "table", table=Table("shell", (
+            Key("radius", "quantity", unit="m", required=True, positive=True),
+            Key("thickness", "quantity", unit="m", required=True, positive=True),
+            Key("conductivity", "quantity", unit="S/m", required=True, positive=True))),
+            doc="thin conducting spherical shell"),
+        Key("sphere", "table", table=Table("sphere", (
+            Key("radius", "quantity", unit="m", required=True, positive=True),
+            Key("conductivity", "quantity", unit="S/m", required=True, positive=True))),
+            doc="solid conducting sphere"),
+        Key("field", "table", table=_FIELD_TABLE,
+            doc="the magnetic field; default the Earth's tilted dipole"),
+        Key("mu", "quantity", unit="m3/s2", positive=True,
+            doc="gravitational parameter of the primary (dipole field); default the Earth's"),
+        Key("orbit", "table", table=ORBIT_TABLE, doc=ORBIT_TABLE.doc + " (dipole field)"),
+    ), exactly_one=(("magnetic_tensor", "shell", "sphere"),),
+        doc="Eddy currents induced by a magnetic field: `(M (w x B)) x B`."),
+    Table("heavy_top", (
+        Key("pivot_to_com", "quantity", unit="m", shape=(3,), required=True,
+            doc="pivot -> centre of mass, body frame"),
+        Key("mass", "quantity", unit="kg", positive=True, doc="default the body's mass"),
+        Key("g", "quantity", unit="m/s2", positive=True, doc="gravity; default 9.80665"),
+        Key("up", "quantity", unit="", shape=(3,), doc="inertial unit vector, up"),
+    ), doc="Uniform gravity about a fixed pivot."),
+)}
 
 def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
-    if not isinstance(table, Mapping):
-        raise TorqueConfigError("expected a table { a = \"7000 km\", e = 0.0, "
-                                "i = \"0 deg\", ... }", key=key)
-    _check_keys(table, _ORBIT_KEYS, key)
-    if "a" not in table:
-        raise TorqueConfigError("missing: the semi-major axis is required", key=f"{key}.a")
-    elements = {"mu": mu}
-    units = {"a": "m", "e": "", "i": "rad", "raan": "rad", "argp": "rad",
-             "mean_anomaly": "rad"}
-    for name, unit in units.items():
-        if name in table:
-            elements[name] = _quantity(table[name], unit, f"{key}.{name}")
+    """A validated :data:`ORBIT_TABLE` (SI values; ``epoch`` an astropy Time) -> orbit."""
+    elements = {k: table[k] for k in ORBIT_TABLE.names() if k in table and k != "epoch"}
     try:
-        orbit = KeplerOrbit(**elements)
+        orbit = KeplerOrbit(mu=mu, **elements)
     except OrbitError as err:
         raise TorqueConfigError(err.reason, key=f"{key}.{err.key}") from None
     if "epoch" in table:
         if base_epoch is None:
             raise TorqueConfigError("an orbit epoch needs the scenario epoch "
                                     "(from_config(..., base_epoch=...))", key=f"{key}.epoch")
-        try:
-            epoch = (table["epoch"] if isinstance(table["epoch"], Time)
-                     else Time(table["epoch"], scale=base_epoch.scale))
-        except (ValueError, TypeError) as exc:
-            raise TorqueConfigError(f"cannot read {table['epoch']!r} as a "
-                                    f"time ({exc})", key=f"{key}.epoch") from None
-        dt = float((base_epoch - epoch).to_value(u.s))
+        dt = float((base_epoch - table["epoch"]).to_value(u.s))
         orbit = KeplerOrbit(orbit.mu, orbit.a, orbit.e, orbit.i, orbit.raan, orbit.argp,
                             orbit.mean_anomaly + orbit.mean_motion * dt)
     return orbit
@@ -974,24 +978,12 @@ def _earth_rotation_angle(epoch) -> float:
 
 
 def _gravity_gradient(table, base_epoch):
-    _check_keys(table, ("type", "mu", "orbit"), "")
-    for key in ("mu", "orbit"):
-        if key not in table:
-            raise TorqueConfigError("missing: a gravity_gradient torque needs 'mu' and "
-                                    "'orbit'", key=key)
-    mu = _positive(table["mu"], "m3/s2", "mu")
+    mu = table["mu"]
     return GravityGradient(mu, _orbit_from_table(table["orbit"], mu, "orbit", base_epoch))
 
 
 def _constant(table, base_epoch):
-    _check_keys(table, ("type", "torque", "frame"), "")
-    if "torque" not in table:
-        raise TorqueConfigError("missing: give { value = [x, y, z], unit = "
-                                "\"N m\" }", key="torque")
-    frame = table.get("frame", "body")
-    if not isinstance(frame, str):
-        raise TorqueConfigError(f"expected 'body' or 'inertial', got {frame!r}", key="frame")
-    return ConstantTorque(table["torque"], frame=frame)
+    return ConstantTorque(table["torque"], frame=table.get("frame", "body"))
 
 
 def _dissipation(table, base_epoch):
@@ -1017,15 +1009,7 @@ def _prefixed(prefix: str, build: Callable, *args, **kwargs):
 
 def _field_from_table(table, base_epoch):
     field_table = table.get("field", {"model": "dipole"})
-    if not isinstance(field_table, Mapping):
-        raise TorqueConfigError("expected a table { model = \"dipole\", ... } or "
-                                "{ model = \"uniform\", vector = {...} }", key="field")
     model = field_table.get("model", "dipole")
-    if model not in _FIELD_KEYS:
-        near = difflib.get_close_matches(str(model), list(_FIELD_KEYS), n=1)
-        did = f"did you mean {near[0]!r}? " if near else ""
-        raise TorqueConfigError(f"unknown field model {model!r}; {did}choose "
-                                "'dipole' or 'uniform'", key="field.model")
     _check_keys(field_table, _FIELD_KEYS[model], "field")
     if model == "uniform":
         for key in ("orbit", "mu"):
@@ -1034,11 +1018,11 @@ def _field_from_table(table, base_epoch):
         if "vector" not in field_table:
             raise TorqueConfigError("missing: give { value = [x, y, z], "
                                     "unit = \"nT\" }", key="field.vector")
-        return UniformField(_quantity(field_table["vector"], "T", "field.vector", shape=(3,)))
+        return UniformField(field_table["vector"])
     if "orbit" not in table:
         raise TorqueConfigError("missing: the dipole field is evaluated along the "
                                 "body's orbit (or use field.model = \"uniform\")", key="orbit")
-    mu = _positive(table.get("mu", EARTH_MU), "m3/s2", "mu")
+    mu = table.get("mu", EARTH_MU)
     orbit = _orbit_from_table(table["orbit"], mu, "orbit", base_epoch)
     kwargs = {k: field_table[k] for k in _FIELD_KEYS["dipole"][1:] if k in field_table}
     if "rotation_angle" not in kwargs and base_epoch is not None:
@@ -1047,40 +1031,19 @@ def _field_from_table(table, base_epoch):
 
 
 def _eddy_current(table, base_epoch):
-    _check_keys(table, ("type", "magnetic_tensor", "shell", "sphere", "field", "mu",
-                        "orbit"), "")
-    given = [k for k in ("magnetic_tensor", "shell", "sphere") if k in table]
-    if len(given) != 1:
-        raise TorqueConfigError("give exactly one of 'magnetic_tensor' (S m4), 'shell' "
-                                "{radius, thickness, conductivity} or 'sphere' "
-                                "{radius, conductivity}",
-                                key=given[1] if len(given) > 1 else "magnetic_tensor")
     field = _field_from_table(table, base_epoch)
-    kind = given[0]
-    if kind == "magnetic_tensor":
+    if "magnetic_tensor" in table:
         return EddyCurrentDamping(table["magnetic_tensor"], field)
-    spec = table[kind]
-    if not isinstance(spec, Mapping):
-        raise TorqueConfigError("expected a table { radius = ..., conductivity = ... }", key=kind)
-    needed = ("radius", "thickness", "conductivity") if kind == "shell" else (
-        "radius", "conductivity")
-    _check_keys(spec, needed, kind)
-    for key in needed:
-        if key not in spec:
-            raise TorqueConfigError("missing", key=f"{kind}.{key}")
-    if kind == "shell":
-        return _prefixed(kind, EddyCurrentDamping.spherical_shell, spec["radius"],
+    if "shell" in table:
+        spec = table["shell"]
+        return _prefixed("shell", EddyCurrentDamping.spherical_shell, spec["radius"],
                          spec["thickness"], spec["conductivity"], field)
-    return _prefixed(kind, EddyCurrentDamping.solid_sphere, spec["radius"],
+    spec = table["sphere"]
+    return _prefixed("sphere", EddyCurrentDamping.solid_sphere, spec["radius"],
                      spec["conductivity"], field)
 
 
 def _heavy_top(table, base_epoch):
-    _check_keys(table, ("type", "mass", "pivot_to_com", "g", "up"), "")
-    if "pivot_to_com" not in table:
-        raise TorqueConfigError("missing: give the pivot -> centre of mass "
-                                "vector in the body frame, e.g. { value = "
-                                "[0, 0, 4], unit = \"cm\" }", key="pivot_to_com")
     kwargs = {k: table[k] for k in ("mass", "g", "up") if k in table}
     return HeavyTopPivot(pivot_to_com=table["pivot_to_com"], **kwargs)
 
@@ -1162,9 +1125,17 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
     if "type" not in table:
         raise TorqueConfigError(f"missing; choose one of {', '.join(TORQUE_TYPES)}", key="type")
     kind = table["type"]
-    if kind not in TORQUE_TYPES:
-        near = difflib.get_close_matches(str(kind), list(TORQUE_TYPES), n=1)
+    if not isinstance(kind, str) or kind not in TORQUE_TYPES:
+        near = difflib.get_close_matches(kind, list(TORQUE_TYPES), n=1) if isinstance(
+            kind, str) else []
         did = f"did you mean {near[0]!r}? " if near else ""
         raise TorqueConfigError(f"unknown torque type {kind!r}; {did}choose one of "
                                 f"{', '.join(TORQUE_TYPES)}", key="type")
-    return TORQUE_TYPES[kind](table, base_epoch)
+    orbit = table.get("orbit")
+    if base_epoch is not None and isinstance(orbit, Mapping) and isinstance(
+            orbit.get("epoch"), str):     # an orbit epoch is read in the scenario's scale
+        table = {**table, "orbit": {**orbit, "epoch": {"value": orbit["epoch"],
+                                                       "scale": base_epoch.scale}}}
+    values = validate(table, TORQUE_TABLES[kind].with_keys(Key("type", "string")),
+                      error=TorqueConfigError)
+    return TORQUE_TYPES[kind](values, base_epoch)

@@ -1,5 +1,6 @@
-"""docs/scenario.schema.json (JSON Schema draft 2020-12) describes the scenario files: every
-shipped scenario validates, typical mistakes do not, and its keys match the loader's."""
+"""docs/scenario.schema.json (JSON Schema draft 2020-12) describes the scenario files: it is
+generated from the loader's declaration (attitude.scenario_spec.SCENARIO), so the two cannot
+disagree; every shipped scenario validates, typical mistakes do not."""
 
 import json
 import tomllib
@@ -9,16 +10,38 @@ import pytest
 
 from attitude.photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
 from attitude.regimes import PERIOD_KEYS, REGIMES
-from attitude.scenario import CONSERVATION_KEYS, EXPECT_KEYS, SCHEMA
+from attitude.scenario import (
+    CONSERVATION_KEYS,
+    EXPECT_KEYS,
+    SCHEMA,
+    scenario_reference,
+    scenario_schema,
+)
 from tests.test_scenario import GOOD
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA_PATH = ROOT / "docs" / "scenario.schema.json"
 SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+REFERENCE_START = "<!-- BEGIN GENERATED: python -m attitude.scenario --reference -->"
+REFERENCE_END = "<!-- END GENERATED -->"
 
 
 def _schema():
     return json.loads(SCHEMA_PATH.read_text())
+
+
+def test_committed_schema_is_the_generated_one():
+    """Regenerate with: python -m attitude.scenario --schema > docs/scenario.schema.json"""
+    assert _schema() == scenario_schema()
+
+
+def test_reference_in_the_docs_is_the_generated_one():
+    """Regenerate the section between the markers of docs/scenarios.md with
+    python -m attitude.scenario --reference"""
+    text = (ROOT / "docs" / "scenarios.md").read_text()
+    start = text.index(REFERENCE_START) + len(REFERENCE_START)
+    end = text.index(REFERENCE_END)
+    assert text[start:end].strip() == scenario_reference().strip()
 
 
 def test_schema_keys_match_the_loader():

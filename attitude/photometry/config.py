@@ -52,6 +52,262 @@ from attitude.propagation.propagator import propagate
 from attitude.quantities import to_si
 from attitude.shape import Polyhedron
 
+#: JSON Schema of the ``[photometry]`` table (declared in
+#: :data:`attitude.scenario_spec.SCENARIO`; :func:`parse_photometry` checks the same keys).
+PHOTOMETRY_SCHEMA = {
+    "type": "object",
+    "additionalProperties": False,
+    "required": [
+        "shape"
+    ],
+    "description": "photometry (attitude lightcurve): shape, scattering law, geometry, cadence; see docs/photometry.md",  # noqa: E501
+    "properties": {
+        "shape": {
+            "type": "string",
+            "description": "\"ellipsoid\" (from the body's moments, or axes) or an OBJ file"
+        },
+        "axes": {
+            "type": "array",
+            "minItems": 3,
+            "maxItems": 3
+        },
+        "length_unit": {
+            "type": "string"
+        },
+        "subdivisions": {
+            "type": "integer",
+            "minimum": 0,
+            "maximum": 8
+        },
+        "law": {
+            "oneOf": [
+                {
+                    "type": "string"
+                },
+                {
+                    "type": "object",
+                    "required": [
+                        "name"
+                    ]
+                }
+            ]
+        },
+        "materials": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": [
+                    "faces",
+                    "law"
+                ],
+                "additionalProperties": False,
+                "properties": {
+                    "faces": {
+                        "type": "array",
+                        "items": {
+                            "type": "integer"
+                        },
+                        "minItems": 2,
+                        "maxItems": 2
+                    },
+                    "law": {
+                        "oneOf": [
+                            {
+                                "type": "string"
+                            },
+                            {
+                                "type": "object",
+                                "required": [
+                                    "name"
+                                ]
+                            }
+                        ]
+                    }
+                }
+            }
+        },
+        "sun": {
+            "type": "array",
+            "items": {
+                "type": "number"
+            },
+            "minItems": 3,
+            "maxItems": 3
+        },
+        "observer": {
+            "oneOf": [
+                {
+                    "type": "array",
+                    "items": {
+                        "type": "number"
+                    },
+                    "minItems": 3,
+                    "maxItems": 3
+                },
+                {
+                    "enum": [
+                        "earth",
+                        "sun"
+                    ]
+                }
+            ]
+        },
+        "orbit": {
+            "type": "object"
+        },
+        "light_time": {
+            "type": "boolean"
+        },
+        "cadence": {
+            "type": [
+                "number",
+                "string"
+            ]
+        },
+        "noise": {
+            "type": [
+                "number",
+                "string"
+            ]
+        },
+        "seed": {
+            "type": "integer"
+        },
+        "shadows": {
+            "type": "boolean"
+        },
+        "periods": {
+            "enum": [
+                1,
+                2
+            ]
+        },
+        "order": {
+            "type": "integer",
+            "minimum": 1,
+            "maximum": 8
+        },
+        "output": {
+            "type": "string"
+        }
+    }
+}
+#: JSON Schemas of the lightcurve ``[expect]`` keys.
+EXPECT_SCHEMAS = {
+    "lightcurve_period": {
+        "type": "object",
+        "properties": {
+            "value": {
+                "type": "number"
+            },
+            "unit": {
+                "type": "string"
+            },
+            "rel_tol": {
+                "type": "number",
+                "minimum": 0
+            },
+            "abs_tol": {
+                "type": "number",
+                "minimum": 0
+            }
+        },
+        "additionalProperties": False,
+        "required": [
+            "value"
+        ],
+        "oneOf": [
+            {
+                "required": [
+                    "rel_tol"
+                ]
+            },
+            {
+                "required": [
+                    "abs_tol"
+                ]
+            }
+        ],
+        "description": "photometry: the double-peaked lightcurve period (default unit s)"
+    },
+    "lightcurve_amplitude": {
+        "type": "object",
+        "properties": {
+            "value": {
+                "type": "number"
+            },
+            "unit": {
+                "type": "string"
+            },
+            "rel_tol": {
+                "type": "number",
+                "minimum": 0
+            },
+            "abs_tol": {
+                "type": "number",
+                "minimum": 0
+            }
+        },
+        "additionalProperties": False,
+        "required": [
+            "value"
+        ],
+        "oneOf": [
+            {
+                "required": [
+                    "rel_tol"
+                ]
+            },
+            {
+                "required": [
+                    "abs_tol"
+                ]
+            }
+        ],
+        "description": "photometry: peak-to-peak amplitude (default unit mag)"
+    },
+    "lightcurve_lattice": {
+        "type": "object",
+        "properties": {
+            "value": {
+                "type": "array",
+                "items": {
+                    "type": "number"
+                },
+                "minItems": 1
+            },
+            "unit": {
+                "type": "string"
+            },
+            "rel_tol": {
+                "type": "number",
+                "minimum": 0
+            },
+            "abs_tol": {
+                "type": "number",
+                "minimum": 0
+            }
+        },
+        "additionalProperties": False,
+        "required": [
+            "value"
+        ],
+        "oneOf": [
+            {
+                "required": [
+                    "rel_tol"
+                ]
+            },
+            {
+                "required": [
+                    "abs_tol"
+                ]
+            }
+        ],
+        "description": "photometry: periods whose frequencies lie on the fitted lattice n1/P1 + n2/P2 within rel_tol"  # noqa: E501
+    }
+}
+
 __all__ = ["PhotometryConfig", "LightcurveRun", "parse_photometry", "run_lightcurve",
            "check_lightcurve", "EXPECT_KEYS"]
 

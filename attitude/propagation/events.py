@@ -27,10 +27,10 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from astropy import units as u
 from scipy.optimize import brentq
 
 from ..errors import InvalidStateError, PropagationError
+from ..quantities import to_si
 
 __all__ = ["Event", "nutation_crossing", "event_table"]
 
@@ -110,18 +110,10 @@ def nutation_crossing(angle, axis="C", *, terminal: bool = True, direction: int 
     >>> ev.terminal, ev.direction
     (False, 0)
     """
-    try:
-        if isinstance(angle, u.Quantity):
-            angle = angle.to_value(u.rad)
-        value = float(angle)
-    except (TypeError, ValueError, u.UnitsError) as exc:
-        raise InvalidStateError(f"nutation_crossing: angle must be a number (rad) or an "
-                                f"angle Quantity, got {angle!r} ({exc})") from None
-    if not (0.0 <= value <= math.pi):
-        raise InvalidStateError(f"nutation_crossing: angle {value!r} rad is outside "
-                                "[0, pi]")
+    value = to_si(angle, "rad", key="angle", shape=(), bounds=(0.0, math.pi),
+                  error=InvalidStateError)
     key = axis.upper() if isinstance(axis, str) else axis
-    if key not in _AXES:
+    if isinstance(key, bool) or not isinstance(key, (str, int)) or key not in _AXES:
         raise InvalidStateError(f"nutation_crossing: axis {axis!r} is not one of 'A', "
                                 "'B', 'C', 0, 1, 2")
     k = _AXES[key]

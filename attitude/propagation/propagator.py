@@ -21,6 +21,7 @@ from ..body import RigidBody, as_bodies
 from ..ephemeris import Ephemeris
 from ..errors import InvalidStateError
 from ..population import Ensemble, check_batch
+from ..quantities import to_si
 from ..state import AttitudeState, stack_states
 from .batch import propagate_ensemble
 from .events import as_events, locate, name_of
@@ -45,20 +46,8 @@ def elapsed_seconds(times, epoch: Time) -> np.ndarray:
     if isinstance(times, Time):
         # difference taken in the epoch's scale: seconds of TDB, not of TT, for a TDB epoch
         t = (getattr(times, epoch.scale) - epoch).to_value(u.s)
-    elif isinstance(times, u.Quantity):
-        try:
-            t = times.to_value(u.s)
-        except u.UnitConversionError:
-            raise InvalidStateError(
-                f"times: unit '{times.unit}' is not a time unit; give seconds, a time "
-                "Quantity or an astropy Time array") from None
-    else:
-        try:
-            t = np.asarray(times, dtype=float)
-        except (TypeError, ValueError):
-            raise InvalidStateError(
-                f"times: expected seconds since the epoch, a Quantity or a Time array, got "
-                f"{type(times).__name__}") from None
+    else:   # seconds, a time Quantity, "30 min", {value, unit}: the one quantity reader
+        t = to_si(times, "s", key="times", finite=False, error=InvalidStateError)
     t = np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1:
         raise InvalidStateError(f"times: expected a 1-D array, got shape {t.shape}")
@@ -410,20 +399,9 @@ _DESCRIPTION = {
 
 
 def _step_seconds(step) -> float:
-    """``step=`` as float seconds (a number or a time Quantity)."""
-    if isinstance(step, u.Quantity):
-        try:
-            step = step.to_value(u.s)
-        except u.UnitConversionError:
-            raise InvalidStateError(f"step: unit '{step.unit}' is not a time unit") from None
-    try:
-        value = float(step)
-    except (TypeError, ValueError):
-        raise InvalidStateError(f"step: expected seconds or a time Quantity, got "
-                                f"{step!r}") from None
-    if not (value > 0 and np.isfinite(value)):
-        raise InvalidStateError(f"step: expected a positive, finite step, got {step!r}")
-    return value
+    """``step=`` as float seconds (a number, a time Quantity or a string such as
+    ``"10 s"``)."""
+    return to_si(step, "s", key="step", shape=(), positive=True, error=InvalidStateError)
 
 
 def _exact(bodies, q0: np.ndarray, w0: np.ndarray, t: np.ndarray):

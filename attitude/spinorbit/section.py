@@ -41,6 +41,140 @@ from .libration import long_axis_angle, measure_libration
 from .model import SpinOrbit
 from .planar import periodic_orbit
 
+#: JSON Schema of the ``[section]`` table (declared in
+#: :data:`attitude.scenario_spec.SCENARIO`; :func:`parse_section` checks the same keys).
+SECTION_SCHEMA = {
+    "type": "object",
+    "description": "Spin-orbit surface of section (attitude section): grid of initial conditions at periapsis, angles (rad or {min, max, count, unit}) and rates (spin rate / mean motion).",  # noqa: E501
+    "properties": {
+        "n_orbits": {
+            "type": "integer",
+            "minimum": 1
+        },
+        "angles": {
+            "oneOf": [
+                {
+                    "type": "array",
+                    "items": {
+                        "type": "number"
+                    },
+                    "minItems": 1
+                },
+                {
+                    "type": "object",
+                    "properties": {
+                        "min": {
+                            "type": "number"
+                        },
+                        "max": {
+                            "type": "number"
+                        },
+                        "count": {
+                            "type": "integer",
+                            "minimum": 1
+                        },
+                        "unit": {
+                            "type": "string"
+                        }
+                    },
+                    "required": [
+                        "min",
+                        "max",
+                        "count"
+                    ],
+                    "additionalProperties": False
+                }
+            ]
+        },
+        "rates": {
+            "oneOf": [
+                {
+                    "type": "array",
+                    "items": {
+                        "type": "number"
+                    },
+                    "minItems": 1
+                },
+                {
+                    "type": "object",
+                    "properties": {
+                        "min": {
+                            "type": "number"
+                        },
+                        "max": {
+                            "type": "number"
+                        },
+                        "count": {
+                            "type": "integer",
+                            "minimum": 1
+                        },
+                        "unit": {
+                            "type": "string"
+                        }
+                    },
+                    "required": [
+                        "min",
+                        "max",
+                        "count"
+                    ],
+                    "additionalProperties": False
+                }
+            ]
+        },
+        "lyapunov": {
+            "type": "boolean"
+        },
+        "rtol": {
+            "type": "number"
+        },
+        "seed": {
+            "type": "integer",
+            "minimum": 0
+        },
+        "netcdf": {
+            "type": "string"
+        }
+    },
+    "required": [
+        "angles",
+        "rates"
+    ],
+    "additionalProperties": False
+}
+#: JSON Schemas of the spin-orbit ``[expect]`` keys.
+EXPECT_SCHEMAS = {
+    "libration_amplitude": {
+        "type": "object",
+        "description": "Forced libration in longitude measured from the run (spin-orbit wing).",
+        "properties": {
+            "value": {
+                "type": "number",
+                "minimum": 0
+            },
+            "unit": {
+                "type": "string"
+            },
+            "rel_tol": {
+                "type": "number",
+                "minimum": 0
+            },
+            "abs_tol": {
+                "type": "number",
+                "minimum": 0
+            }
+        },
+        "required": [
+            "value"
+        ],
+        "additionalProperties": False
+    },
+    "resonance": {
+        "type": "string",
+        "pattern": "^(none|[0-9]+:[0-9]+)$",
+        "description": "The p:q spin-orbit state of the run (\"1:1\", \"3:2\", or \"none\")."
+    }
+}
+
 __all__ = ["EXPECT_KEYS", "SECTION_KEYS", "SectionConfig", "parse_expect",
            "parse_section", "load_tables", "spin_orbit_of", "expectation_values",
            "mean_spin_resonance", "run_section", "write_section", "island_centres",
