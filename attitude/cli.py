@@ -23,6 +23,8 @@ from pathlib import Path
 from .classify import classification_json, classify, format_classification
 from .ephemeris import Ephemeris, write_atomically
 from .errors import AttitudeError, PropagationError
+from .fitting import fit, sample_posterior
+from .fitting.config import fitted_scenario
 from .formats.aem import convert
 from .formats.spice import convert_to_ck
 from .photometry.config import run_lightcurve  # photometry (issue 15)
@@ -561,6 +563,57 @@ def _cmd_section(args) -> int:
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK
+_FIT_HELP = """\
+Fit the rotation state (and moment ratios) of a scenario to its [observations]: the
+[body] and [state] are the first guess; attitude samples, body rates and periods (with
+their 1-sigma) are fitted by least squares with the exact torque-free solution, from the
+guess and its discrete alternatives (SAM/LAM mirror, psi0 + pi). Prints the parameters
+with their 1-sigma, the regime and its margin; writes the best state as a scenario you
+can run ([observations].output or -o), and with --posterior the MCMC samples (emcee) as
+netCDF.
+
+  attitude fit scenarios/tumbler_fit.toml
+  attitude run scenarios/tumbler_fit_fit.toml
+
+Exit codes: 0 a converged fit, 1 the fit did not converge (the reason is printed),
+2 bad input.
+"""
+
+
+def _cmd_fit(args) -> int:
+    scenario = load_scenario(args.scenario)
+    cfg = scenario.observations
+    if cfg is None:
+        print(f"attitude: error: {args.scenario}: observations: the scenario has no "
+              "[observations] table (attitude, rates or periods)", file=sys.stderr)
+        return EXIT_INPUT
+    result = fit(list(cfg.observations), scenario.body, scenario.state, free=cfg.free)
+    target = Path(args.output) if args.output else cfg.output
+    text = fitted_scenario(result, name=scenario.name, duration=scenario.duration,
+                           step=scenario.step, source=Path(args.scenario).name)
+    written = [write_atomically(target, lambda tmp: Path(tmp).write_text(text))]
+    post = None
+    if args.posterior or cfg.posterior is not None:
+        opts = cfg.posterior or {}
+        post = sample_posterior(result, n_walkers=opts.get("walkers", 32),
+                                n_steps=opts.get("steps", 1000), rng=opts.get("seed"))
+        nc = cfg.posterior_netcdf or Path(args.scenario).with_suffix(".posterior.nc")
+        written.append(write_atomically(nc, lambda tmp: post.samples.to_netcdf(tmp)))
+    if not args.quiet:
+        print(f"{scenario.name}: {'converged' if result.success else 'NOT CONVERGED'} "
+              f"({result.message})")
+        print(result.summary())
+        if len(result.alternatives) > 1:
+            alts = ", ".join(f"{r} chi2 {c:.4g}" for c, r in result.alternatives)
+            print(f"  optima from the {len(result.alternatives)} starts: {alts}")
+        if post is not None:
+            print(f"  posterior: regime fractions {post.regime_fractions}, acceptance "
+                  f"{post.acceptance_fraction:.2f}")
+        for path in written:
+            print(f"wrote {path}")
+    return EXIT_OK if result.success else EXIT_EXPECTATION
+
+
 # --- photometry (issue 15): attitude lightcurve ------------------------------------------
 _LIGHTCURVE_HELP = """\
 Propagate a scenario, render its lightcurve from the [photometry] table (shape, law,
@@ -674,6 +727,18 @@ def build_parser() -> argparse.ArgumentParser:
     sec.add_argument("--plot", action="store_true", help="also write OUT.png (matplotlib)")
     sec.add_argument("--quiet", action="store_true", help="print nothing on success")
     sec.set_defaults(func=_cmd_section)
+    fitp = sub.add_parser("fit", help="fit the rotation state to a scenario's "
+                          "[observations]", description=_FIT_HELP,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+    fitp.add_argument("scenario", metavar="SCENARIO.toml",
+                      help="scenario with [observations]; [body] and [state] are the guess")
+    fitp.add_argument("-o", "--output", metavar="FITTED.toml",
+                      help="the best state as a scenario (default [observations].output or "
+                           "SCENARIO_fit.toml)")
+    fitp.add_argument("--posterior", action="store_true",
+                      help="also sample the posterior (emcee; [observations.posterior])")
+    fitp.add_argument("--quiet", action="store_true", help="print nothing on success")
+    fitp.set_defaults(func=_cmd_fit)
     # --- photometry (issue 15) ---
     lcp = sub.add_parser("lightcurve", help="synthesise a scenario's lightcurve and fit its "
                          "periods", description=_LIGHTCURVE_HELP,

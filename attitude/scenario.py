@@ -30,6 +30,7 @@ from .classify import classify
 from .diagnostics import DIAGNOSTIC_VARIABLES, SCALAR_DIAGNOSTICS, add_diagnostics
 from .ephemeris import Ephemeris, relative_drifts
 from .errors import AttitudeError, DiagnosticsError, InvalidBodiesWarning, ScenarioError
+from .fitting.config import parse_observations
 from .freebody import diagnose
 from .photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
 from .photometry.config import parse_photometry
@@ -97,6 +98,9 @@ class Scenario:
     """The ``[[events]]`` as :class:`attitude.Event` objects (passed to ``propagate``)."""
     section: Any = None
     """The ``[section]`` table (:class:`attitude.spinorbit.section.SectionConfig`)."""
+    observations: Any = None
+    """The parsed ``[observations]`` table (:class:`attitude.fitting.config.ObservationsConfig`),
+    used by ``attitude fit``."""
     photometry: Any = None
     """The parsed ``[photometry]`` table (:class:`attitude.photometry.config.PhotometryConfig`),
     used by ``attitude lightcurve``."""
@@ -216,6 +220,9 @@ def load_scenario(path: str | Path) -> Scenario:
     section = spinorbit_section.load_tables(   # spin-orbit wing: [section], its [expect]
         doc, body=body, torques=torques, expect=expect, ensemble=ensemble,
         folder=path.parent, fail=r.fail)
+    observations = None                        # fitting wing: [observations]
+    if "observations" in doc:
+        observations = parse_observations(doc["observations"], path.parent, path, state.epoch)
     photometry = None                          # photometry wing: [photometry], its [expect]
     if "photometry" in doc:
         photometry = parse_photometry(doc["photometry"], doc.get("expect"), path, body)
@@ -226,7 +233,7 @@ def load_scenario(path: str | Path) -> Scenario:
                     integrator_step=integrator_step, order=order, torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect,
                     ensemble=ensemble, chunk=chunk, events=events, section=section,
-                    photometry=photometry)
+                    photometry=photometry, observations=observations)
 
 
 def _ensemble(r: _Reader, doc: dict, folder: Path):

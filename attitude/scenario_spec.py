@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 from .body import MassProperties
+from .fitting.config import OBSERVATIONS
 from .photometry import config as photometry_config
 from .propagation.propagator import METHODS
 from .quantities import TIME_SCALES
@@ -220,6 +221,8 @@ SCENARIO = Table("", (
     Key("output", "table", table=OUTPUT),
     Key("expect", "table", table=EXPECT),
     Key("ensemble", "table", table=ENSEMBLE),
+    Key("observations", "table", table=OBSERVATIONS,
+        doc="what was measured, for `attitude fit` (docs/tutorial_fitting.md)"),
     Key("section", "any", schema=spinorbit_section.SECTION_SCHEMA,
         doc="surface of section for `attitude section` (docs/spinorbit.md; checked by "
             "attitude.spinorbit.section)"),

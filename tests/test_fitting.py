@@ -272,3 +272,32 @@ def test_two_sigma_intervals_cover_the_truth_with_lightcurves():
             inside.append(abs(d) <= 2 * res.uncertainties[name])
     assert failed <= 2
     assert np.mean(inside) >= 0.90, np.mean(inside)
+
+
+def test_attitude_fit_cli_end_to_end(tmp_path, capsys):
+    """scenarios/tumbler_fit.toml: its first guess fitted to its CSV of quaternions; the
+    fitted scenario loads, and holds the moment ratios the data were made with (A/C =
+    0.6, B/C = 0.9) within 4 sigma of the printed uncertainties."""
+    from attitude.cli import main
+    from attitude.scenario import load_scenario
+    out = tmp_path / "fitted.toml"
+    assert main(["fit", "scenarios/tumbler_fit.toml", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "converged" in text and "regime LAM" in text
+    fitted = load_scenario(out)
+    p, _ = free_parameters(fitted.body, fitted.state)
+    sigma = {line.split()[0]: float(line.split()[3]) for line in text.splitlines()
+             if line.strip().startswith(("ratio_a", "ratio_b"))}
+    assert abs(p["ratio_a"] - 0.6) < 4 * sigma["ratio_a"]
+    assert abs(p["ratio_b"] - 0.9) < 4 * sigma["ratio_b"]
+
+
+def test_attitude_fit_bad_observations_exit_2(tmp_path, capsys):
+    from attitude.cli import main
+    (tmp_path / "q.csv").write_text("t,qx,qy,qz\n0,0,0,0\n")
+    text = open("scenarios/tumbler_fit.toml").read().replace(
+        "data/tumbler_quaternions.csv", "q.csv")
+    (tmp_path / "s.toml").write_text(text)
+    assert main(["fit", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "observations.attitude.file" in err and "qw" in err and "Traceback" not in err

@@ -1,0 +1,213 @@
+"""The ``[observations]`` table of a scenario file and the ``attitude fit`` run.
+
+The scenario's ``[body]`` and ``[state]`` are the first guess; ``[observations]`` says
+what was measured::
+
+    [observations]
+    free = ["energy_ratio", "ratio_a", "ratio_b", "precession_period", "phi0", "psi0"]
+    attitude = { file = "tracker.csv", sigma = "0.05 deg" }   # t (s) or time (ISO, UTC),
+                                                               # qx, qy, qz, qw
+    rates = { file = "gyro.csv", sigma = "1e-4 rad/s" }        # t or time, wx, wy, wz
+    periods = { precession = { value = 27.38, sigma = 0.07, unit = "h" } }
+    output = "fitted.toml"                  # the best state as a scenario (default
+                                            # <scenario>_fit.toml)
+    posterior = { walkers = 32, steps = 2000, seed = 1, netcdf = "posterior.nc" }
+
+Times in the files are seconds since the ``[state]`` epoch (column ``t``) or ISO 8601
+dates in UTC (column ``time``).  Lightcurves are fitted from Python
+(:class:`~attitude.fitting.LightcurveObservations`); a scenario key for them is future
+work.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from astropy.time import Time
+
+from ..errors import ScenarioError
+from ..regimes import PERIOD_KEYS
+from ..spec import Key, Table
+from ..state import format_epoch
+from .leastsq import FitResult
+from .observations import AngularVelocityObservations, AttitudeObservations, PeriodObservations
+from .parameters import PARAMETERS
+
+__all__ = ["OBSERVATIONS", "ObservationsConfig", "parse_observations", "fitted_scenario"]
+
+_FILE = (Key("file", "string", required=True, doc="CSV, path relative to the scenario"),)
+
+#: The ``[observations]`` table (declared in :data:`attitude.scenario_spec.SCENARIO`).
+OBSERVATIONS = Table("observations", (
+    Key("free", "any", schema={"type": "array", "items": {"enum": list(PARAMETERS)},
+                               "minItems": 1, "uniqueItems": True},
+        doc="parameters to fit (attitude.fitting.PARAMETERS); default all"),
+    Key("attitude", "table", table=Table("attitude", _FILE + (
+        Key("sigma", "quantity", unit="rad", required=True, positive=True,
+            doc="angular 1-sigma per axis"),)),
+        doc="quaternions (body -> inertial): columns t or time, qx, qy, qz, qw"),
+    Key("rates", "table", table=Table("rates", _FILE + (
+        Key("sigma", "quantity", unit="rad/s", required=True, positive=True),)),
+        doc="body rates: columns t or time, wx, wy, wz (rad/s)"),
+    Key("periods", "table", table=Table("periods", tuple(
+        Key(k, "table", table=Table(k, (
+            Key("value", "number", required=True, positive=True),
+            Key("sigma", "number", required=True, positive=True),
+            Key("unit", "unit", unit="s", default="s"))), doc=f"the {k} period")
+        for k in PERIOD_KEYS)), doc="measured periods with their 1-sigma"),
+    Key("output", "string", doc="the best state as a scenario file; default "
+                                "<scenario>_fit.toml"),
+    Key("posterior", "table", table=Table("posterior", (
+        Key("walkers", "integer", positive=True, default=32),
+        Key("steps", "integer", positive=True, default=1000),
+        Key("seed", "integer", nonnegative=True),
+        Key("netcdf", "string", doc="samples; default <scenario>_posterior.nc"),
+    )), doc="MCMC (emcee) after the fit"),
+), doc="What was measured; the [body] and [state] are the first guess (attitude fit).")
+
+
+@dataclass(frozen=True)
+class ObservationsConfig:
+    """The parsed ``[observations]`` table."""
+
+    observations: tuple
+    free: tuple | None
+    output: Path
+    posterior: dict | None
+    posterior_netcdf: Path | None
+
+
+def _csv(folder: Path, spec: dict, where: str, columns: tuple, epoch: Time, path):
+    file = folder / spec["file"]
+    try:
+        data = np.genfromtxt(file, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    except (OSError, ValueError) as exc:
+        raise ScenarioError(f"cannot read {file}: {exc}", key=f"{where}.file",
+                            path=path) from None
+    data = np.atleast_1d(data)
+    names = data.dtype.names or ()
+    missing = [c for c in columns if c not in names]
+    if missing or not ({"t", "time"} & set(names)):
+        raise ScenarioError(f"{file.name} needs the columns {', '.join(columns)} and t "
+                            f"(s since the [state] epoch) or time (ISO, UTC); it has "
+                            f"{', '.join(names)}", key=f"{where}.file", path=path)
+    if "t" in names:
+        times = np.asarray(data["t"], dtype=float)
+    else:
+        try:
+            times = Time(list(data["time"]), scale="utc")
+        except ValueError as exc:
+            raise ScenarioError(f"{file.name}: bad time: {exc}", key=f"{where}.file",
+                                path=path) from None
+    values = np.stack([np.asarray(data[c], dtype=float) for c in columns], axis=-1)
+    return times, values
+
+
+def parse_observations(table: dict, folder: Path, scenario_path: Path,
+                       epoch: Time) -> ObservationsConfig:
+    """Observation objects from a validated ``[observations]`` table.
+
+    Raises
+    ------
+    ScenarioError
+        Naming the key: unreadable or malformed files, no observations, unknown
+        parameter names in ``free``.
+    """
+    path = str(scenario_path)
+    obs = []
+    try:
+        if "attitude" in table:
+            t, q = _csv(folder, table["attitude"], "observations.attitude",
+                        ("qx", "qy", "qz", "qw"), epoch, path)
+            obs.append(AttitudeObservations(t, q, table["attitude"]["sigma"]))
+        if "rates" in table:
+            t, w = _csv(folder, table["rates"], "observations.rates", ("wx", "wy", "wz"),
+                        epoch, path)
+            obs.append(AngularVelocityObservations(t, w, table["rates"]["sigma"]))
+        if table.get("periods"):
+            pairs = {k: (f"{v['value']} {v.get('unit', 's')}", f"{v['sigma']} "
+                         f"{v.get('unit', 's')}") for k, v in table["periods"].items()}
+            obs.append(PeriodObservations(**pairs))
+    except ScenarioError:
+        raise
+    except Exception as exc:  # the observation objects raise keyed AttitudeErrors
+        key = getattr(exc, "key", None)
+        raise ScenarioError(getattr(exc, "reason", str(exc)),
+                            key=f"observations.{key}" if key else "observations",
+                            path=path) from None
+    if not obs:
+        raise ScenarioError("give attitude, rates or periods", key="observations",
+                            path=path)
+    free = table.get("free")
+    if free is not None:
+        if not (isinstance(free, list) and free and all(isinstance(f, str) for f in free)):
+            raise ScenarioError("expected a non-empty list of parameter names",
+                                key="observations.free", path=path)
+        bad = [f for f in free if f not in PARAMETERS]
+        if bad:
+            raise ScenarioError(f"unknown parameter(s) {bad}; use {', '.join(PARAMETERS)}",
+                                key="observations.free", path=path)
+        free = tuple(free)
+    stem = scenario_path.with_suffix("")
+    output = folder / table["output"] if "output" in table else \
+        Path(f"{stem}_fit.toml")
+    post = table.get("posterior")
+    netcdf = None
+    if post is not None:
+        netcdf = folder / post["netcdf"] if "netcdf" in post else \
+            Path(f"{stem}_posterior.nc")
+    return ObservationsConfig(tuple(obs), free, output, post, netcdf)
+
+
+def _vector(v) -> str:
+    return "[" + ", ".join(f"{float(x):.17g}" for x in v) + "]"
+
+
+def fitted_scenario(result: FitResult, *, name: str, duration: float, step: float,
+                    source: str) -> str:
+    """The fitted body and state as the text of a scenario file one can propagate.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+    >>> truth = att.AttitudeState("2029-04-13", Rotation.identity(), [0.05, 0.1, 1.0])
+    >>> t = np.linspace(0.0, 10.0, 20)
+    >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
+    >>> res = att.fit(att.AttitudeObservations(t, q, "0.01 deg"), body, truth,
+    ...               free=["energy_ratio"], multistart=False)
+    >>> text = fitted_scenario(res, name="demo", duration=60.0, step=1.0, source="demo.toml")
+    >>> import tomllib; sorted(tomllib.loads(text))
+    ['body', 'propagation', 'scenario', 'state']
+    """
+    state, body = result.state, result.body
+    rows = ",\n  ".join(_vector(r) for r in body.inertia)
+    lines = [
+        f"# Fitted by `attitude fit {source}`: regime {result.regime}, chi2 = "
+        f"{result.chi2:.6g} for {result.dof} degrees of freedom.",
+        "# Parameters (1-sigma):",
+        *(f"#   {k} = {result.parameters[k]:.10g} +- {result.uncertainties[k]:.3g}"
+          for k in PARAMETERS),
+        "",
+        "[scenario]",
+        f'name = "{name} (fitted)"',
+        "",
+        "[body]",
+        f"inertia = [\n  {rows},\n]   # kg m2, body frame",
+        "",
+        "[state]",
+        f'epoch = "{format_epoch(state.epoch)}"',
+        f'time_scale = "{state.epoch.scale}"',
+        f'frame = "{state.frame}"',
+        f"attitude = {{ quaternion_scalar_last = {_vector(state.attitude.as_quat())} }}",
+        f'omega_body = {{ value = {_vector(state.omega_body)}, unit = "rad/s" }}',
+        "",
+        "[propagation]",
+        f'duration = "{duration:.17g} s"',
+        f'step = "{step:.17g} s"',
+        "",
+    ]
+    return "\n".join(lines)
