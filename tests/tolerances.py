@@ -55,11 +55,12 @@ EXACT_SOLUTION = 64
 #: ``n * SPLITTING_STEP`` ulp.
 SPLITTING_STEP = EXACT_SOLUTION + FEW_OPS
 
-#: DOP853 batch against single runs: the batch shares one step-size sequence chosen from
-#: the error norm of all its bodies, the single run its own, so the two differ by up to
-#: the integrator's own local tolerance, not by ulps; tests pass ``rtol`` times this
-#: factor (the global error of an rtol-controlled run over a few hundred steps stays
-#: below ~10 rtol in practice, Hairer, Norsett & Wanner (1993) II.4).
+#: DOP853 along two paths (a batch and a single run, chunks): an ulp of difference in
+#: the right-hand side (BLAS, SIMD) can flip one step's acceptance, after which the two
+#: adaptive runs follow different step sequences and differ by up to the integrator's
+#: tolerance, not by ulps.  Tests allow ``INTEGRATOR_PATHS * rtol`` relative: the global
+#: error of an rtol-controlled run over a few hundred steps of a non-chaotic problem
+#: stays below ~10 rtol (Hairer, Norsett & Wanner 1993, section II.4).
 INTEGRATOR_PATHS = 10.0
 
 
