@@ -165,14 +165,50 @@ def _dask_arrays(bounds, args, T, client):
         client = shared_local_client()
     elif isinstance(client, str):
         client = client_for(client)
+    elif client is None:
+        client = _default_client()
     shapes = {"q": (T, 4), "w": (T, 3), "L": (T, 3), "E": (T,), "status": ()}
     dtypes = {"status": np.int8}
     pieces = {k: [] for k in shapes}
+    scattered: dict[int, object] = {}
     for a, b in bounds:
-        part = dask.delayed(_propagate_chunk, pure=True)(*args(a, b))
+        chunk_args = args(a, b)
+        if client is not None:
+            chunk_args = _scatter_arrays(client, chunk_args, scattered)
+        part = dask.delayed(_propagate_chunk, pure=True)(*chunk_args)
         for k, shape in shapes.items():
             pieces[k].append(da.from_delayed(part[k], shape=(b - a,) + shape,
                                              dtype=dtypes.get(k, np.float64)))
+    if scattered and len(client.scheduler_info().get("workers", {})) > 1:
+        client.replicate([f for f, _ in scattered.values()], n=2)
     return {k: da.concatenate(v, axis=0) for k, v in pieces.items()}
 
 
+def _default_client():
+    """The dask.distributed client the graph would run on (None without one)."""
+    try:
+        from distributed import default_client  # optional ('attitude[dask]')
+    except ImportError:
+        return None
+    try:
+        return default_client()
+    except ValueError:                              # no client in this process
+        return None
+
+
+def _scatter_arrays(client, chunk_args, scattered: dict):
+    """``chunk_args`` with its numpy arrays replaced by futures of data scattered to the
+    workers, so that the graph holds keys, not the ensemble (17.7 MiB of inputs at 1e5
+    bodies, issue 14): each chunk's inputs go to one worker (``broadcast=False``); an
+    array shared by every chunk (the times) is scattered once (``scattered``, by id).
+    Scattered data has no task to recompute it, so each piece is kept on a second
+    worker where there is one: a worker that dies loses no input, and its tasks rerun."""
+    out = []
+    for x in chunk_args:
+        if isinstance(x, np.ndarray):
+            key = id(x)
+            if key not in scattered:
+                scattered[key] = (client.scatter(x, broadcast=False, hash=True), x)
+            x = scattered[key][0]
+        out.append(x)
+    return tuple(out)
