@@ -500,3 +500,38 @@ def test_masses_travel_with_the_bodies_for_torques_that_need_them():
                  ulps=INTEGRATOR_PATHS * rtol / EPS, magnitude=1.0, what="quaternion")
     ens = att.Ensemble.from_bodies(bodies, states)
     assert ens.mass.tolist() == [2.0, 3.0] and ens.bodies[1].mass == 3.0
+
+
+def test_classify_ensemble_reads_a_dask_backed_ephemeris_one_chunk_at_a_time(monkeypatch):
+    """A lazy ephemeris is classified chunk by chunk along ``body`` (never loaded whole)
+    and gives the classes of the in-memory one, invalid bodies included."""
+    from attitude import statistics
+
+    rng = np.random.default_rng(4)
+    n = 10
+    moments = np.tile([1.0, 2.0, 3.0], (n, 1))
+    moments[3] = [1.0, 1.0, 5.0]                            # violates the triangle rule
+    w = rng.normal(size=(n, 3)) * [0.3, 0.05, 0.3]          # both sides of the separatrix
+    with pytest.warns(en.InvalidBodiesWarning):
+        ens = att.Ensemble.from_arrays(principal_moments=moments, omega_body=w, epoch=EPOCH)
+    t = np.linspace(0.0, 400.0, 400)
+    eager = en.classify_ensemble(att.propagate(ens, t))
+    seen = []
+
+    class Spy(att.Ephemeris):
+        def __init__(self, ds):
+            seen.append(ds.sizes["body"])
+            assert not any(hasattr(v.data, "dask") for v in ds.data_vars.values())
+            super().__init__(ds)
+
+    monkeypatch.setattr(statistics, "Ephemeris", Spy)
+    lazy = en.classify_ensemble(att.propagate(ens, t, chunks=4))
+    assert seen == [4, 4, 2]                                  # one chunk in memory at a time
+    assert lazy.regime.values.tolist() == eager.regime.values.tolist()
+    assert {"SAM", "LAM", "invalid"} <= set(eager.regime.values.tolist())
+    assert lazy.reason.values.tolist() == eager.reason.values.tolist()
+    # confidence and margin are smooth functions of ephemerides that agree to a few ulps
+    # (chunks against the whole); 1e-9 relative allows a condition number of 1e5
+    for name in ("confidence", "margin"):
+        np.testing.assert_allclose(lazy[name].values, eager[name].values, rtol=1e-9,
+                                   atol=1e-9 * np.nanmax(np.abs(eager[name].values)))
