@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["EPS", "ulps", "assert_agree", "agree", "STORAGE", "FEW_OPS", "EXACT_SOLUTION",
-           "SPLITTING_STEP", "INTEGRATOR_PATHS", "attitude_angle"]
+           "SPLITTING_STEP", "TORQUE_EVAL", "INTEGRATOR_PATHS", "attitude_angle"]
 
 #: Machine epsilon of float64 (the spacing of 1.0, 2 u).
 EPS = float(np.finfo(float).eps)
@@ -54,6 +54,14 @@ EXACT_SOLUTION = 64
 #: steps of a non-chaotic run the differences add (at most linearly), so ``n`` steps get
 #: ``n * SPLITTING_STEP`` ulp.
 SPLITTING_STEP = EXACT_SOLUTION + FEW_OPS
+
+#: One evaluation of a torque model, vectorised against per element: the primary's
+#: position (a Kepler solve, 4 ulp), the attitude applied to it and to the field
+#: (:data:`FEW_OPS` each) and a cross product of terms, ~32 ulp of the scale of the terms
+#: per side, 64 for two.  The magnitude to use is the scale of the terms (the largest
+#: torque over random attitudes), not one component: a cross product of nearly parallel
+#: vectors is small while its rounding errors are not.
+TORQUE_EVAL = 64
 
 #: DOP853 along two paths (a batch and a single run, chunks): an ulp of difference in
 #: the right-hand side (BLAS, SIMD) can flip one step's acceptance, after which the two
