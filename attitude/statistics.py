@@ -161,7 +161,8 @@ def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:
 
 def attitude_spread(eph, nominal=0) -> xr.DataArray:
     """Angle (rad) between each body's attitude and the nominal's, ``(body, time)``:
-    ``2 arccos |q . q_nominal|``, the angle of the rotation taking one to the other.
+    the angle of the rotation taking one to the other (``2 arccos |q . q_nominal|``,
+    computed as ``4 atan2(|q - q_nominal|, |q + q_nominal|)``, accurate also near 0).
 
     ``nominal``: a body index of the batch (default 0, the nominal of
     :meth:`Ensemble.sample`) or a single-body :class:`~attitude.Ephemeris` on the same
@@ -174,8 +175,14 @@ def attitude_spread(eph, nominal=0) -> xr.DataArray:
         qn = qn.assign_coords(time=q["time"])
     else:
         qn = q.isel(body=int(nominal))
-    dot = abs((q * qn).sum("quaternion_component"))
-    angle = 2.0 * np.arccos(np.minimum(dot, 1.0))
+    # 4 atan2(|q - s qn|, |q + s qn|), s = sign(q . qn): the chord and its complement are
+    # 2 sin(angle / 4) and 2 cos(angle / 4).  2 arccos|q . qn| is the same angle but
+    # loses half the digits near 0 (an ulp of the dot product is 3e-8 rad), so two runs
+    # that agree to ulps would not agree on the spread
+    s = xr.where((q * qn).sum("quaternion_component") < 0, -1.0, 1.0)
+    chord = np.sqrt(((q - s * qn) ** 2).sum("quaternion_component"))
+    other = np.sqrt(((q + s * qn) ** 2).sum("quaternion_component"))
+    angle = 4.0 * np.arctan2(chord, other)
     angle.attrs = {"units": "rad", "long_name": "angle from the nominal attitude"}
     return angle.rename("attitude_spread")
 
