@@ -201,6 +201,8 @@ def _scatter_arrays(client, chunk_args, scattered: dict):
     workers, so that the graph holds keys, not the ensemble (17.7 MiB of inputs at 1e5
     bodies, issue 14): each chunk's inputs go to one worker (``broadcast=False``); an
     array shared by every chunk (the times) is scattered once (``scattered``, by id).
+    Keys are unique, not content hashes: equal arrays of two runs (an all-zero status)
+    must not share a key that one run releases while the other still needs it.
     Scattered data has no task to recompute it, so each piece is kept on a second
     worker where there is one: a worker that dies loses no input, and its tasks rerun."""
     out = []
@@ -208,7 +210,7 @@ def _scatter_arrays(client, chunk_args, scattered: dict):
         if isinstance(x, np.ndarray):
             key = id(x)
             if key not in scattered:
-                scattered[key] = (client.scatter(x, broadcast=False, hash=True), x)
+                scattered[key] = (client.scatter(x, broadcast=False, hash=False), x)
             x = scattered[key][0]
         out.append(x)
     return tuple(out)
