@@ -135,10 +135,11 @@ def test_client_local_starts_a_shared_local_cluster(tmp_path):
     assert float(d1) <= ulps(1.0, EXACT_SOLUTION) and float(d2) <= ulps(1.0, EXACT_SOLUTION)
 
 
-def test_ensemble_inputs_travel_as_scattered_data_not_in_the_graph(client):
-    """The graph of an ensemble run on a cluster holds keys of scattered inputs: its size
-    does not grow with the number of bodies (it held the whole ensemble before, 17.7 MiB
-    at 1e5 bodies), and the result is the one of a single process."""
+def test_ensemble_inputs_travel_ahead_of_the_graph_not_in_it(client):
+    """The graph of an ensemble run on a cluster holds the keys of inputs held on the
+    workers: its size does not grow with the number of bodies (it held the whole
+    ensemble before, 17.7 MiB at 1e5 bodies), and the result is the one of a single
+    process."""
     t = np.linspace(0.0, 600.0, 5)
     size = {}
     for n in (200, 4000):                  # the same 4 chunks, 20 times the bodies

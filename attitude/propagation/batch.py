@@ -179,8 +179,6 @@ def _dask_arrays(bounds, args, T, client):
         for k, shape in shapes.items():
             pieces[k].append(da.from_delayed(part[k], shape=(b - a,) + shape,
                                              dtype=dtypes.get(k, np.float64)))
-    if scattered and len(client.scheduler_info().get("workers", {})) > 1:
-        client.replicate([f for f, _ in scattered.values()], n=2)
     return {k: da.concatenate(v, axis=0) for k, v in pieces.items()}
 
 
@@ -196,21 +194,29 @@ def _default_client():
         return None
 
 
+def _held(x):
+    """A task whose result is its argument: an input array held on the workers."""
+    return x
+
+
 def _scatter_arrays(client, chunk_args, scattered: dict):
-    """``chunk_args`` with its numpy arrays replaced by futures of data scattered to the
+    """``chunk_args`` with its numpy arrays replaced by futures of them held on the
     workers, so that the graph holds keys, not the ensemble (17.7 MiB of inputs at 1e5
-    bodies, issue 14): each chunk's inputs go to one worker (``broadcast=False``); an
-    array shared by every chunk (the times) is scattered once (``scattered``, by id).
-    Keys are unique, not content hashes: equal arrays of two runs (an all-zero status)
-    must not share a key that one run releases while the other still needs it.
-    Scattered data has no task to recompute it, so each piece is kept on a second
-    worker where there is one: a worker that dies loses no input, and its tasks rerun."""
+    bodies, issue 14); an array shared by every chunk (the times) is sent once
+    (``scattered``, by id).
+
+    Not ``client.scatter``: scattered data has no task that could recompute it, so a
+    worker that dies takes its chunk's inputs with it and the run fails ("lost scattered
+    data, which can't be recovered"; ``client.replicate`` is undone by the active memory
+    manager's ReduceReplicas policy).  Each array is the result of a small task instead
+    (``client.submit``, sent to one worker), which the scheduler reruns on another
+    worker when the one holding it dies, so the chunks that need it rerun too."""
     out = []
     for x in chunk_args:
         if isinstance(x, np.ndarray):
             key = id(x)
             if key not in scattered:
-                scattered[key] = (client.scatter(x, broadcast=False, hash=False), x)
+                scattered[key] = (client.submit(_held, x, pure=False), x)
             x = scattered[key][0]
         out.append(x)
     return tuple(out)
