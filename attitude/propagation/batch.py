@@ -165,16 +165,14 @@ def _dask_arrays(bounds, args, T, client):
         client = shared_local_client()
     elif isinstance(client, str):
         client = client_for(client)
-    elif client is None:
-        client = _default_client()
     shapes = {"q": (T, 4), "w": (T, 3), "L": (T, 3), "E": (T,), "status": ()}
     dtypes = {"status": np.int8}
     pieces = {k: [] for k in shapes}
-    scattered: dict[int, object] = {}
+    held: dict[int, object] = {}
     for a, b in bounds:
         chunk_args = args(a, b)
-        if client is not None:
-            chunk_args = _scatter_arrays(client, chunk_args, scattered)
+        if client is not None:          # chunks= alone: dask's current scheduler, as is
+            chunk_args = _inputs_on_workers(client, chunk_args, held)
         part = dask.delayed(_propagate_chunk, pure=True)(*chunk_args)
         for k, shape in shapes.items():
             pieces[k].append(da.from_delayed(part[k], shape=(b - a,) + shape,
@@ -182,28 +180,16 @@ def _dask_arrays(bounds, args, T, client):
     return {k: da.concatenate(v, axis=0) for k, v in pieces.items()}
 
 
-def _default_client():
-    """The dask.distributed client the graph would run on (None without one)."""
-    try:
-        from distributed import default_client  # optional ('attitude[dask]')
-    except ImportError:
-        return None
-    try:
-        return default_client()
-    except ValueError:                              # no client in this process
-        return None
-
-
 def _held(x):
     """A task whose result is its argument: an input array held on the workers."""
     return x
 
 
-def _scatter_arrays(client, chunk_args, scattered: dict):
+def _inputs_on_workers(client, chunk_args, held: dict):
     """``chunk_args`` with its numpy arrays replaced by futures of them held on the
     workers, so that the graph holds keys, not the ensemble (17.7 MiB of inputs at 1e5
     bodies, issue 14); an array shared by every chunk (the times) is sent once
-    (``scattered``, by id).
+    (``held``, by id).
 
     Not ``client.scatter``: scattered data has no task that could recompute it, so a
     worker that dies takes its chunk's inputs with it and the run fails ("lost scattered
@@ -215,8 +201,8 @@ def _scatter_arrays(client, chunk_args, scattered: dict):
     for x in chunk_args:
         if isinstance(x, np.ndarray):
             key = id(x)
-            if key not in scattered:
-                scattered[key] = (client.submit(_held, x, pure=False), x)
-            x = scattered[key][0]
+            if key not in held:
+                held[key] = (client.submit(_held, x, pure=False), x)
+            x = held[key][0]
         out.append(x)
     return tuple(out)
