@@ -105,37 +105,66 @@ def classify_ensemble(eph, **options) -> xr.Dataset:
     not 0, ``"unclassified"`` when the classification failed, e.g. a run shorter than a
     cycle), ``confidence``, ``margin`` and ``reason`` (why a body is not classified).
     One body that cannot be classified does not stop the others.  ``options`` go to
-    :func:`attitude.classify` (default ``require_periods=False``); a dask-backed
-    ephemeris is loaded first."""
+    :func:`attitude.classify` (default ``require_periods=False``).  A dask-backed
+    ephemeris is read one chunk of bodies at a time (its own chunks along ``body``), so
+    the memory held is one chunk, not the ensemble.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ens = att.Ensemble.from_arrays(principal_moments=[[1, 2, 3]] * 2,
+    ...     omega_body=[[0.1, 0.0, 1.0], [1.0, 0.0, 0.1]], epoch="2030-01-01")
+    >>> table = classify_ensemble(att.propagate(ens, np.linspace(0, 200, 400), chunks=1))
+    >>> table.regime.values.tolist()
+    ['SAM', 'LAM']
+    """
     if not eph.is_batch:
         raise InvalidStateError("classify_ensemble takes a batch ephemeris (dims body, "
                                 "time); use attitude.classify for one body")
     ds = eph.dataset
-    if any(hasattr(v.data, "dask") for v in ds.data_vars.values()):
-        eph = Ephemeris(ds.load())
-        ds = eph.dataset
     options.setdefault("require_periods", False)
-    n = ds.sizes["body"]
-    status = ds["status"].values if "status" in ds else np.zeros(n, dtype=np.int8)
+    n, lazy = ds.sizes["body"], _lazy(ds)
     regime = np.full(n, "invalid", dtype=object)
     confidence, margin = np.full(n, np.nan), np.full(n, np.nan)
     reason = np.full(n, "", dtype=object)
-    for i in range(n):
-        if status[i] != STATUS_OK:
-            reason[i] = "invalid input" if status[i] == STATUS_INVALID else \
-                "propagation failed"
-            continue
-        try:
-            c = classify(eph, body_index=i, **options)
-        except AttitudeError as exc:
-            regime[i], reason[i] = "unclassified", str(exc)
-            continue
-        regime[i], confidence[i], margin[i] = c.regime, c.confidence, c.margin
+    for a, b in _body_chunks(ds):
+        # one chunk in memory at a time (its status read with it: computing the status
+        # of a lazy run alone would propagate every chunk once more)
+        part = Ephemeris(ds.isel(body=slice(a, b)).load()) if lazy else eph
+        status = part.dataset["status"].values if "status" in part.dataset else \
+            np.zeros(part.dataset.sizes["body"], dtype=np.int8)
+        offset = a if lazy else 0
+        for i in range(a, b):
+            if status[i - offset] != STATUS_OK:
+                reason[i] = "invalid input" if status[i - offset] == STATUS_INVALID else \
+                    "propagation failed"
+                continue
+            try:
+                c = classify(part, body_index=i - offset, **options)
+            except AttitudeError as exc:
+                regime[i], reason[i] = "unclassified", str(exc)
+                continue
+            regime[i], confidence[i], margin[i] = c.regime, c.confidence, c.margin
     return xr.Dataset({"regime": ("body", regime.astype(str)),
                        "confidence": ("body", confidence),
                        "margin": ("body", margin),
                        "reason": ("body", reason.astype(str))},
                       coords={"body": np.arange(n)})
+
+
+def _lazy(ds: xr.Dataset) -> bool:
+    return any(hasattr(v.data, "dask") for v in ds.data_vars.values())
+
+
+def _body_chunks(ds: xr.Dataset) -> list[tuple[int, int]]:
+    """``(start, stop)`` of the chunks of bodies to read one at a time: the dask chunks of
+    the quaternions along ``body`` (one chunk, the whole, for numpy-backed data)."""
+    n = ds.sizes["body"]
+    chunks = getattr(ds["quaternion"].data, "chunks", None) if _lazy(ds) else None
+    if not chunks:
+        return [(0, n)]
+    stops = np.cumsum(chunks[0])
+    return [(int(b - c), int(b)) for b, c in zip(stops, chunks[0])]
 
 
 def _classify_one(eph) -> str:
@@ -177,7 +206,8 @@ def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:
 
 def attitude_spread(eph, nominal=0) -> xr.DataArray:
     """Angle (rad) between each body's attitude and the nominal's, ``(body, time)``:
-    ``2 arccos |q . q_nominal|``, the angle of the rotation taking one to the other.
+    the angle of the rotation taking one to the other (``2 arccos |q . q_nominal|``,
+    computed as ``4 atan2(|q - q_nominal|, |q + q_nominal|)``, accurate also near 0).
 
     ``nominal``: a body index of the batch (default 0, the nominal of
     :meth:`Ensemble.sample`) or a single-body :class:`~attitude.Ephemeris` on the same
@@ -206,8 +236,14 @@ def attitude_spread(eph, nominal=0) -> xr.DataArray:
         qn = qn.assign_coords(time=q["time"])
     else:
         qn = q.isel(body=int(nominal))
-    dot = abs((q * qn).sum("quaternion_component"))
-    angle = 2.0 * np.arccos(np.minimum(dot, 1.0))
+    # 4 atan2(|q - s qn|, |q + s qn|), s = sign(q . qn): the chord and its complement are
+    # 2 sin(angle / 4) and 2 cos(angle / 4).  2 arccos|q . qn| is the same angle but
+    # loses half the digits near 0 (an ulp of the dot product is 3e-8 rad), so two runs
+    # that agree to ulps would not agree on the spread
+    s = xr.where((q * qn).sum("quaternion_component") < 0, -1.0, 1.0)
+    chord = np.sqrt(((q - s * qn) ** 2).sum("quaternion_component"))
+    other = np.sqrt(((q + s * qn) ** 2).sum("quaternion_component"))
+    angle = 4.0 * np.arctan2(chord, other)
     angle.attrs = {"units": "rad", "long_name": "angle from the nominal attitude"}
     return angle.rename("attitude_spread")
 

@@ -16,7 +16,6 @@ Targets are those of issue 4.
 from __future__ import annotations
 
 import math
-import os
 
 import mpmath as mp
 import numpy as np
@@ -32,6 +31,7 @@ from attitude.propagation.torquefree import (
 )
 
 from . import oracle as O
+from .tolerances import EXACT_SOLUTION, ulps
 
 EPS = np.finfo(float).eps
 Q0 = np.array([0.3, -0.5, 0.1, 0.8]) / np.linalg.norm([0.3, -0.5, 0.1, 0.8])
@@ -361,13 +361,10 @@ def test_separatrix_tolerance_boundary(w3, branch, lt_max):
 # ---------------------------------------------------------------------------
 hyp = pytest.importorskip("hypothesis")
 import hypothesis  # noqa: E402
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, example, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-# reproducible examples on CI, no example database written into the work tree
-settings.register_profile("torquefree", database=None,
-                          derandomize=bool(os.environ.get("CI")))
-settings.load_profile("torquefree")
+# the hypothesis profile (derandomised on CI, no example database) is tests/conftest.py's
 
 
 @st.composite
@@ -427,8 +424,9 @@ def test_property_batch_equals_single(items):
     qb, wb = free_rotation(I, Q, W, t)
     for i in range(len(items)):
         qs, ws = free_rotation(I[i], Q[i], W[i], t)
-        assert O.attitude_error(qb[i], qs).max() <= 1e-13
-        assert np.max(np.abs(wb[i] - ws)) <= 1e-14 * np.abs(ws).max()
+        # two paths of the exact solution: ulps of |q| = 1 and of the rates, not bits
+        assert O.attitude_error(qb[i], qs).max() <= ulps(1.0, EXACT_SOLUTION)
+        assert np.max(np.abs(wb[i] - ws)) <= ulps(np.abs(ws).max(), EXACT_SOLUTION)
 
 
 @settings(max_examples=40, deadline=None)
@@ -454,8 +452,23 @@ def test_property_semigroup(bs, t1, t2):
 
 @settings(max_examples=20, deadline=None)
 @given(bodies_states())
+# near the unstable intermediate axis, where DOP853's local errors are amplified most
+# (seen failing the former fixed 1e-8 with random draws like these, at A/C = 0.017)
+@example((np.array([0.05, 0.5, 1.0]), np.array([1e-8, 1.0, -1e-8]),
+          np.array([0.0, 0.0, 0.0, 1.0])))
+@example((np.array([0.05, 0.5, 1.0]) * 1e9, np.array([-3e-9, 2e-3, 7e-9]) * 1e-3,
+          np.array([0.5, -0.5, 0.5, 0.5])))
+@example((np.array([0.0825, 0.9928, 1.0]), np.array([0.3, -0.7, 0.2]),   # worst generic
+          np.array([0.0, 0.6, 0.0, 0.8])))
 def test_property_vs_dop853(bs):
-    """Agreement with scipy's DOP853 at rtol 1e-12 over 5 radians of rotation."""
+    """Agreement with scipy's DOP853 at rtol 1e-12 over 5 radians of rotation.
+
+    The tolerance is DOP853's: its local errors (~rtol) add up over the run and are
+    amplified by the flow at most like exp(lam_s |omega| t), lam_s |omega| the growth rate
+    at the unstable intermediate axis (Euler's equations linearised there); 100 rtol
+    times that bound.  Draws amplifying by more than e^12 (a flat body spinning near its
+    intermediate axis) are skipped: there no double-precision integrator pins the
+    motion down, and the closed form is checked there against the mpmath references."""
     from scipy.integrate import solve_ivp
 
     I, w, q0 = bs
@@ -463,6 +476,11 @@ def test_property_vs_dop853(bs):
     if wn < 1e-150:
         return
     A, B, C = I / I[2]
+    span = 5.0                                          # radians of rotation
+    lam_s = math.sqrt(max((C - B) * (B - A), 0.0) / (A * C))  # per unit |omega| t
+    hypothesis.assume(lam_s * span < 12.0)
+    rtol = 1e-12
+    tol = 100 * rtol * math.exp(lam_s * span)
 
     def rhs(_, y):
         w1, w2, w3, x, yq, z, s = y
@@ -470,12 +488,12 @@ def test_property_vs_dop853(bs):
                 0.5 * (s * w1 + yq * w3 - z * w2), 0.5 * (s * w2 - x * w3 + z * w1),
                 0.5 * (s * w3 + x * w2 - yq * w1), -0.5 * (x * w1 + yq * w2 + z * w3)]
 
-    t = np.linspace(0.0, 5.0 / wn, 6)
-    sol = solve_ivp(rhs, (0, t[-1]), np.concatenate([w, q0]), method="DOP853", rtol=1e-12,
+    t = np.linspace(0.0, span / wn, 6)
+    sol = solve_ivp(rhs, (0, t[-1]), np.concatenate([w, q0]), method="DOP853", rtol=rtol,
                     atol=1e-14 * wn, t_eval=t)
     q, wt = free_rotation(I, q0, w, t)
-    assert O.attitude_error(q, sol.y[3:].T).max() <= 1e-8
-    assert np.max(np.abs(wt - sol.y[:3].T)) <= 1e-8 * wn
+    assert O.attitude_error(q, sol.y[3:].T).max() <= tol
+    assert np.max(np.abs(wt - sol.y[:3].T)) <= tol * wn
 
 
 # ---------------------------------------------------------------------------
@@ -493,7 +511,7 @@ def test_shapes():
     q, w = free_rotation(I[0], Q0, W[0], tt)
     for i in range(3):
         qs, ws = free_rotation(I[0, i], Q0, W[0, i], tt[i])
-        assert O.attitude_error(q[i], qs).max() < 1e-14
+        assert O.attitude_error(q[i], qs).max() <= ulps(1.0, EXACT_SOLUTION)
     q, w = free_rotation([1, 2, 3], Q0, [0.3, 0.2, 1], 5.0)
     assert q.shape == (1, 4)
 

@@ -168,11 +168,41 @@ def _dask_arrays(bounds, args, T, client):
     shapes = {"q": (T, 4), "w": (T, 3), "L": (T, 3), "E": (T,), "status": ()}
     dtypes = {"status": np.int8}
     pieces = {k: [] for k in shapes}
+    held: dict[int, object] = {}
     for a, b in bounds:
-        part = dask.delayed(_propagate_chunk, pure=True)(*args(a, b))
+        chunk_args = args(a, b)
+        if client is not None:          # chunks= alone: dask's current scheduler, as is
+            chunk_args = _inputs_on_workers(client, chunk_args, held)
+        part = dask.delayed(_propagate_chunk, pure=True)(*chunk_args)
         for k, shape in shapes.items():
             pieces[k].append(da.from_delayed(part[k], shape=(b - a,) + shape,
                                              dtype=dtypes.get(k, np.float64)))
     return {k: da.concatenate(v, axis=0) for k, v in pieces.items()}
 
 
+def _held(x):
+    """A task whose result is its argument: an input array held on the workers."""
+    return x
+
+
+def _inputs_on_workers(client, chunk_args, held: dict):
+    """``chunk_args`` with its numpy arrays replaced by futures of them held on the
+    workers, so that the graph holds keys, not the ensemble (17.7 MiB of inputs at 1e5
+    bodies, issue 14); an array shared by every chunk (the times) is sent once
+    (``held``, by id).
+
+    Not ``client.scatter``: scattered data has no task that could recompute it, so a
+    worker that dies takes its chunk's inputs with it and the run fails ("lost scattered
+    data, which can't be recovered"; ``client.replicate`` is undone by the active memory
+    manager's ReduceReplicas policy).  Each array is the result of a small task instead
+    (``client.submit``, sent to one worker), which the scheduler reruns on another
+    worker when the one holding it dies, so the chunks that need it rerun too."""
+    out = []
+    for x in chunk_args:
+        if isinstance(x, np.ndarray):
+            key = id(x)
+            if key not in held:
+                held[key] = (client.submit(_held, x, pure=False), x)
+            x = held[key][0]
+        out.append(x)
+    return tuple(out)
