@@ -53,10 +53,7 @@ def seconds_since(epoch: Time, times) -> np.ndarray:
 
 def _si(value, unit: str, key: str):
     """The quantity reader, its error keyed by ``key``."""
-    try:
-        return to_si(value, unit, name=key, error=ValueError)
-    except ValueError as exc:
-        raise AttitudeError(str(exc).removeprefix(f"{key}: "), key=key) from None
+    return to_si(value, unit, key=key, finite=False, error=AttitudeError)
 
 
 def _sigma(value, unit: str, key: str) -> float:
