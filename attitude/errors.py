@@ -319,8 +319,8 @@ class LightcurveFormatError(AttitudeError, ValueError):
     >>> try:
     ...     read_lightcurve(path)
     ... except LightcurveFormatError as err:
-    ...     print(err.reason[:24])
-    cannot tell the format: 
+    ...     print(err.reason[:22])
+    cannot tell the format
     """
 
 
