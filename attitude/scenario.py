@@ -835,8 +835,10 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
     >>> sc = load_scenario("scenarios/dzhanibekov.toml")    # expects SAM, polhode 3.3108 s
     >>> drift = {"angular_momentum_rel_drift": 1e-15, "energy_rel_drift": 1e-15}
     >>> results = check_expectations(sc, "SAM", {"polhode": 3.5}, drift)
-    >>> [(r["key"], r["ok"]) for r in results]
-    [('regime', True), ('polhode', False), ('angular_momentum_rel_drift', True), ('energy_rel_drift', True)]
+    >>> [r["key"] for r in results if not r["ok"]]            # 3.5 s is off by 6 %
+    ['polhode']
+    >>> len(results)
+    4
     >>> round(results[1]["tolerance"], 8)                       # rel_tol 1e-4 of 3.3108 s
     0.00033108
     """
