@@ -156,9 +156,19 @@ class PropagationError(AttitudeError, RuntimeError):
 
     Examples
     --------
-    >>> err = PropagationError("DOP853 integration failed at t = 12 s: step size too small")
-    >>> isinstance(err, RuntimeError), err.key is None
-    (True, True)
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> def undefined(t, q, w, body):                  # an event function that gives NaN
+    ...     return float("nan")
+    >>> try:
+    ...     att.propagate(body, state, [0.0, 10.0], events=[undefined])
+    ... except PropagationError as err:
+    ...     print(err.reason.split(";")[0])
+    event 'undefined' returned array(nan) at t = 0 s
+    >>> issubclass(PropagationError, RuntimeError)
+    True
     """
 
 
@@ -174,8 +184,8 @@ class EphemerisFormatError(AttitudeError, ValueError):
     >>> try:
     ...     read_aem(path)
     ... except EphemerisFormatError as err:
-    ...     print(type(err).__name__, bool(err.reason))
-    EphemerisFormatError True
+    ...     print(err.key, "|", err.reason)
+    CCSDS_AEM_VERS | the first non-blank line must be 'CCSDS_AEM_VERS = 2.0': found 'hello'
     """
 
 
@@ -215,9 +225,17 @@ class DiagnosticsError(AttitudeError, ValueError):
 
     Examples
     --------
-    >>> err = DiagnosticsError("time must increase strictly: sort the ephemeris")
-    >>> isinstance(err, ValueError), str(err)[:24]
-    (True, 'time must increase stric')
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> from attitude.diagnostics import measure_periods
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> try:
+    ...     measure_periods(eph, reference_axis=2)
+    ... except DiagnosticsError as err:
+    ...     print(err)
+    reference_axis must be 1 (A) or 3 (C), got 2
     """
 
 
@@ -227,10 +245,18 @@ class InsufficientDataError(DiagnosticsError):
 
     Examples
     --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> from attitude.diagnostics import measure_periods
+    >>> try:
+    ...     measure_periods(att.propagate(body, state, [0.0, 5.0, 10.0]))
+    ... except InsufficientDataError as err:
+    ...     print(err)
+    3 samples: at least 6 are needed to measure a period
     >>> issubclass(InsufficientDataError, DiagnosticsError)
     True
-    >>> str(InsufficientDataError("3 samples: at least 4 are needed", key="time"))
-    'time: 3 samples: at least 4 are needed'
     """
 
 
