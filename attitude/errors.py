@@ -126,11 +126,24 @@ class ScenarioError(AttitudeError, ValueError):
 
     Examples
     --------
-    >>> err = ScenarioError("must be > 0, got -1", key="body.mass", path="sat.toml")
-    >>> str(err)
-    'sat.toml: body.mass: must be > 0, got -1'
-    >>> isinstance(err, ValueError)
-    True
+    >>> import tempfile, pathlib
+    >>> from attitude.scenario import load_scenario
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "sat.toml"
+    >>> _ = path.write_text('''
+    ... [body]
+    ... principal_moments = [1.0, 2.0, 3.0]
+    ... [state]
+    ... epoch = "2024-01-01"
+    ... omega_body = [0, 0, 1]
+    ... [propagation]
+    ... duration = "-1 h"
+    ... step = "1 min"
+    ... ''')
+    >>> try:
+    ...     load_scenario(path)
+    ... except ScenarioError as err:
+    ...     print(err.key, "|", err.reason, "|", pathlib.Path(err.path).name)
+    propagation.duration | must be positive, got -3600 s | sat.toml
     """
 
 
@@ -403,6 +416,12 @@ class InvalidBodiesWarning(AttitudeWarning):
 
     Examples
     --------
-    >>> issubclass(InvalidBodiesWarning, AttitudeWarning)
-    True
+    >>> import warnings, attitude as att
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     ens = att.Ensemble.from_arrays(                     # row 1: A + B < C
+    ...         principal_moments=[[1.0, 2.0, 3.0], [1.0, 1.0, 3.0]],
+    ...         omega_body=[[0, 0, 1.0], [0, 0, 1.0]], epoch="2024-01-01")
+    >>> [w.category.__name__ for w in caught], sorted(ens.invalid)
+    (['InvalidBodiesWarning'], [1])
     """
