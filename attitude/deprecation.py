@@ -75,7 +75,19 @@ def moved_attribute(module: str, name: str):
 
 class DeprecatedModule(types.ModuleType):
     """A module registered under an old path that forwards every attribute to the new
-    module, with a :class:`DeprecationWarning` naming the new path."""
+    module, with a :class:`DeprecationWarning` naming the new path.
+
+    Examples
+    --------
+    >>> alias = DeprecatedModule("attitude.aem", "attitude.formats.aem")
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     read_aem = alias.read_aem
+    >>> read_aem.__module__
+    'attitude.formats.aem'
+    >>> print(caught[0].category.__name__, caught[0].message)
+    DeprecationWarning attitude.aem is deprecated; use attitude.formats.aem.read_aem
+    """
 
     def __init__(self, old: str, new: str):
         super().__init__(old, f"Deprecated alias of :mod:`{new}`.")

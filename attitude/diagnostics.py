@@ -90,6 +90,21 @@ class PrincipalSeries:
     moments : (3,) ndarray
         ``A <= B <= C``, kg m^2.
     body : RigidBody
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import principal_series
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> series = principal_series(eph)
+    >>> series.quaternion.shape, series.moments.tolist()
+    ((1501, 4), [0.61, 0.965, 1.0])
+    >>> L = np.linalg.norm(series.momentum_inertial, axis=1)   # conserved without torque
+    >>> bool(np.ptp(L) < 1e-14 * L[0])
+    True
     """
 
     time: np.ndarray
@@ -138,6 +153,20 @@ def principal_series(eph: Ephemeris, body_index: int | None = None) -> Principal
     DiagnosticsError
         On a batch without ``body_index``, non-finite samples, or times that do not
         increase strictly.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import principal_series
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> series = principal_series(eph)
+    >>> series.omega[0].tolist()           # identity body -> principal frame here
+    [0.02, 0.0, 0.1]
+    >>> float(series.time[-1])
+    3000.0
     """
     ds = eph.dataset
     if eph.is_batch:
@@ -197,6 +226,18 @@ def invariants(omega: np.ndarray, moments) -> dict[str, np.ndarray]:
     carry full relative precision (no cancellation):
     ``2EC - L^2 = A(C-A) w1^2 + B(C-B) w2^2``, ``L^2 - 2EA = B(B-A) w2^2 + C(C-A) w3^2``,
     ``L^2 - 2EB = C(C-B) w3^2 - A(B-A) w1^2``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.diagnostics import invariants
+    >>> inv = invariants(np.array([0.02, 0.0, 0.1]), [0.61, 0.965, 1.0])
+    >>> round(float(inv["E"]), 15), round(float(inv["L"]) ** 2, 15)   # E, |L|^2 by hand:
+    (0.005122, 0.01014884)
+    >>> (0.61 * 0.02**2 + 0.1**2) / 2, 0.61**2 * 0.02**2 + 0.1**2  # (A w1^2 + C w3^2)/2, ...
+    (0.005122, 0.01014884)
+    >>> bool(inv["dynamic_inertia"] > 0.965)       # L^2 / 2E > B: rotation about C
+    True
     """
     w = np.asarray(omega, dtype=float)
     A, B, C = (float(x) for x in moments)
@@ -240,6 +281,20 @@ def osculating_polhode_period(omega: np.ndarray, moments) -> np.ndarray:
     logarithmically (``inf`` on it).  A principal-axis spin gets the period of small
     nutation about it.  Axisymmetric bodies: ``2 pi / |Omega|`` with
     ``Omega = omega_s (I_t - I_s)/I_t``.  NaN at rest and for a spherical body.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import osculating_polhode_period
+    >>> moments, omega = [0.61, 0.965, 1.0], np.array([0.02, 0.0, 0.1])
+    >>> P = float(osculating_polhode_period(omega, moments))
+    >>> body = att.RigidBody.from_principal_moments(moments)
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), omega)
+    >>> bool(abs(P / att.diagnose(body, state).periods["polhode"] - 1) < 1e-12)
+    True
+    >>> round(P, 3)
+    442.451
     """
     w = np.asarray(omega, dtype=float)
     A, B, C = (float(x) for x in moments)
@@ -268,7 +323,16 @@ def osculating_polhode_period(omega: np.ndarray, moments) -> np.ndarray:
 def reference_axis_for(moments, dynamic_inertia) -> int:
     """Reference axis (1 = A, 3 = C) of the Euler angles for a body and a typical
     ``L^2/2E``: the symmetry axis of an axisymmetric body, else ``C`` on the SAM side
-    (``L^2/2E >= B``) and ``A`` on the LAM side."""
+    (``L^2/2E >= B``) and ``A`` on the LAM side.
+
+    Examples
+    --------
+    >>> from attitude.diagnostics import reference_axis_for
+    >>> reference_axis_for([0.61, 0.965, 1.0], 0.99)   # L^2/2E > B: short-axis mode
+    3
+    >>> reference_axis_for([0.61, 0.965, 1.0], 0.70)   # L^2/2E < B: long-axis mode
+    1
+    """
     A, B, C = (float(x) for x in moments)
     tol = SYMMETRY_RTOL * C
     if C - A <= tol or B - A <= tol:
@@ -366,6 +430,20 @@ def momentum_frame_angles(series: PrincipalSeries, reference_axis: int = 3
     unit angular momentum in body axes, so ``theta`` and ``psi`` depend on the rates
     only; ``phi`` also needs the attitude.  Angles are unwrapped sample to sample, which
     needs less than half a turn of each angle between samples.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import principal_series, momentum_frame_angles
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> angles = momentum_frame_angles(principal_series(eph))
+    >>> sorted(angles)
+    ['axis_angles', 'nutation', 'precession', 'rotation', 'spin']
+    >>> bool(np.all((angles["nutation"] > 0) & (angles["nutation"] < np.pi / 2)))
+    True
     """
     q, w = _adapted(series.quaternion, series.omega, reference_axis)
     if reference_axis == 3:
@@ -526,6 +604,21 @@ class MeasuredPeriod:
         Number of cycles of the defining signal used.
     method : str
         How it was measured (``"omega_2 zero crossings"``, ...).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import measure_periods
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> p = measure_periods(eph)["polhode"]
+    >>> p.method, p.cycles
+    ('omega_2 zero crossings', 5.0)
+    >>> exact = att.diagnose(body, state).periods["polhode"]
+    >>> bool(abs(float(p) - exact) < 5 * p.uncertainty + 1e-9 * exact)
+    True
     """
 
     value: float
@@ -617,6 +710,21 @@ def measure_periods(source, *, body_index: int | None = None, reference_axis: in
     *Spin* (principal-axis rotation): ``2 pi`` over the slope of the spin angle
     ``phi + psi`` (D 14).  On torque-free ephemerides sampled 20 times per period or more
     these agree with :func:`attitude.diagnose` to better than 1e-8 relative.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import measure_periods
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> periods = measure_periods(eph)
+    >>> sorted(periods)
+    ['polhode', 'precession', 'rotation']
+    >>> exact = att.diagnose(body, state).periods          # the closed form
+    >>> bool(abs(periods["precession"].value / exact["precession"] - 1) < 1e-8)
+    True
     """
     series = source if isinstance(source, PrincipalSeries) else principal_series(
         source, body_index)
@@ -739,6 +847,20 @@ def conservation_drift(series: PrincipalSeries) -> dict:
         (largest ``|drift|``), ``L_drift_rate``, ``E_drift_rate`` (least-squares slope of
         the relative drift, 1/s).  Derivatives are second-order finite differences
         (``numpy.gradient``).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import principal_series, conservation_drift
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> drift = conservation_drift(principal_series(eph))
+    >>> bool(drift["E_rel_drift"] < 1e-14 and drift["L_rel_drift"] < 1e-14)
+    True
+    >>> drift["E"].shape
+    (1501,)
     """
     t = series.time
     inv = invariants(series.omega, series.moments)
@@ -772,6 +894,24 @@ def attitude_noise(series: PrincipalSeries) -> float:
     white noise (``var(Delta^4 x) = 70 sigma^2``; a 2-D Gaussian's median norm is
     ``1.177 sigma``), which removes smooth motion up to cubic in time (D 15).  Zero for an
     exact torque-free ephemeris (to rounding).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> from attitude.diagnostics import principal_series, attitude_noise, PrincipalSeries
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
+    >>> s = principal_series(eph)
+    >>> bool(attitude_noise(s) < 1e-12)                    # exact ephemeris
+    True
+    >>> rng = np.random.default_rng(1)                     # add 1e-4 rad per axis
+    >>> kick = Rotation.from_rotvec(rng.normal(0.0, 1e-4, (1501, 3)))
+    >>> noisy = (Rotation.from_quat(s.quaternion) * kick).as_quat()
+    >>> sigma = attitude_noise(PrincipalSeries(s.time, noisy, s.omega, s.moments, s.body))
+    >>> bool(0.8e-4 < sigma < 1.2e-4)
+    True
     """
     Li = series.momentum_inertial
     n = np.linalg.norm(Li, axis=-1)

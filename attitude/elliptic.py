@@ -51,7 +51,14 @@ _SPLITTER = 134217729.0  # 2**27 + 1, Veltkamp splitting constant
 # error-free transformations (float64)
 # --------------------------------------------------------------------------
 def two_sum(a, b):
-    """``s + e == a + b`` exactly, ``s = fl(a + b)`` (Knuth)."""
+    """``s + e == a + b`` exactly, ``s = fl(a + b)`` (Knuth).
+
+    Examples
+    --------
+    >>> s, e = two_sum(1.0, 1e-17)     # 1e-17 is lost in fl(1 + 1e-17), kept in e
+    >>> s, e
+    (1.0, 1e-17)
+    """
     s = a + b
     bb = s - a
     e = (a - (s - bb)) + (b - bb)
@@ -59,7 +66,13 @@ def two_sum(a, b):
 
 
 def fast_two_sum(a, b):
-    """``s + e == a + b`` exactly, valid for ``|a| >= |b|`` (Dekker)."""
+    """``s + e == a + b`` exactly, valid for ``|a| >= |b|`` (Dekker).
+
+    Examples
+    --------
+    >>> fast_two_sum(1.0, 2.0 ** -60)       # |a| >= |b|
+    (1.0, 8.673617379884035e-19)
+    """
     s = a + b
     e = b - (s - a)
     return s, e
@@ -69,7 +82,15 @@ def split(a):
     """Veltkamp split ``a = hi + lo`` with ``hi`` holding 26 significant bits.
 
     For ``|a| > ~1e291`` (where ``2**27 a`` overflows) the split degrades gracefully
-    to ``(a, 0)``: products then lose their exact error term, nothing worse."""
+    to ``(a, 0)``: products then lose their exact error term, nothing worse.
+
+    Examples
+    --------
+    >>> from fractions import Fraction as F
+    >>> hi, lo = split(0.1)
+    >>> hi + lo == 0.1, F(hi) * F(hi) == F(hi * hi)   # hi * hi is exact: hi has 26 bits
+    (True, True)
+    """
     with np.errstate(over="ignore", invalid="ignore"):
         c = _SPLITTER * a
         hi = c - (c - a)
@@ -79,7 +100,17 @@ def split(a):
 
 
 def two_prod(a, b, b_split=None):
-    """``p + e == a * b`` exactly (Dekker's product; no FMA in numpy)."""
+    """``p + e == a * b`` exactly (Dekker's product; no FMA in numpy).
+
+    Examples
+    --------
+    >>> p, e = two_prod(0.1, 0.1)        # 0.1 * 0.1 = p + e exactly
+    >>> p, e
+    (0.010000000000000002, -8.326672684688674e-19)
+    >>> from fractions import Fraction as F
+    >>> F(p) + F(e) == F(0.1) * F(0.1)
+    True
+    """
     p = a * b
     ah, al = split(a)
     bh, bl = split(b) if b_split is None else b_split
@@ -88,14 +119,28 @@ def two_prod(a, b, b_split=None):
 
 
 def dd_mul_d(x, b):
-    """double-double times double, relative error ~ 2 eps**2."""
+    """double-double times double, relative error ~ 2 eps**2.
+
+    Examples
+    --------
+    >>> x = two_sum(1.0, 1e-20)            # the double-double 1 + 1e-20
+    >>> dd_mul_d(x, 3.0)
+    (3.0, 3e-20)
+    """
     p, e = two_prod(x[0], b)
     e = e + x[1] * b
     return fast_two_sum(p, e)
 
 
 def dd_mul_dd(x, y):
-    """double-double times double-double, relative error ~ 4 eps**2."""
+    """double-double times double-double, relative error ~ 4 eps**2.
+
+    Examples
+    --------
+    >>> x = two_sum(1.0, 1e-20)
+    >>> dd_mul_dd(x, x)                    # (1 + 1e-20)^2 = 1 + 2e-20 + 1e-40
+    (1.0, 2e-20)
+    """
     p, e = two_prod(x[0], y[0])
     e = e + (x[0] * y[1] + x[1] * y[0])
     return fast_two_sum(p, e)
@@ -103,14 +148,28 @@ def dd_mul_dd(x, y):
 
 def dd_add(x, y):
     """double-double sum (Bailey's "sloppy" add; exact when no cancellation
-    of the low parts matters, always correct to ~eps**2 of the operands)."""
+    of the low parts matters, always correct to ~eps**2 of the operands).
+
+    Examples
+    --------
+    >>> dd_add((1.0, 1e-20), (-1.0, 1e-20))    # the low parts survive the cancellation
+    (2e-20, 0.0)
+    """
     s, e = two_sum(x[0], y[0])
     e = e + (x[1] + y[1])
     return fast_two_sum(s, e)
 
 
 def ld_to_dd(x):
-    """Split a ``longdouble`` array into float64 ``(hi, lo)``."""
+    """Split a ``longdouble`` array into float64 ``(hi, lo)``.
+
+    Examples
+    --------
+    >>> third = np.longdouble(1) / 3
+    >>> hi, lo = ld_to_dd(third)
+    >>> float(hi), bool(np.longdouble(hi) + np.longdouble(lo) == third)
+    (0.3333333333333333, True)
+    """
     x = np.asarray(x, dtype=LD)
     hi = x.astype(np.float64)
     lo = (x - hi.astype(LD)).astype(np.float64)
@@ -146,6 +205,17 @@ def landen_chain(m, m1):
         ``prod(1 + g_i)``; ``K(m) = scale * K(mu_base)`` (A&S 17.5.x).
     mu : ndarray (n,) longdouble
         Base parameter ``mu_base`` (``< MU_BASE_MAX``).
+
+    Examples
+    --------
+    >>> from scipy.special import ellipk
+    >>> m = np.array([0.5, 0.99])
+    >>> g, omg, scale, mu = landen_chain(m, 1 - m)
+    >>> g.shape[1], bool(np.all(mu < MU_BASE_MAX))
+    (2, True)
+    >>> K = k_from_chain(scale, mu)               # K(m) = scale * K(mu_base)
+    >>> bool(np.allclose(K.astype(float), ellipk(m), rtol=4e-16, atol=0))
+    True
     """
     m = np.asarray(m, dtype=LD)
     m1 = np.asarray(m1, dtype=LD)
@@ -172,7 +242,17 @@ def landen_chain(m, m1):
 
 def k_from_chain(scale, mu):
     """Complete integral ``K(m) = scale * K(mu)``, ``K(mu)`` from its series
-    (A&S 17.3.11) to O(mu**3)."""
+    (A&S 17.3.11) to O(mu**3).
+
+    Examples
+    --------
+    >>> from scipy.special import ellipk
+    >>> m = np.array([0.2, 0.999999])
+    >>> g, omg, scale, mu = landen_chain(m, 1 - m)
+    >>> K = k_from_chain(scale, mu).astype(float)
+    >>> bool(np.allclose(K, ellipk(m), rtol=1e-15, atol=0))
+    True
+    """
     return scale * (PI_LD / 2) * (1 + mu / 4 + 9 * mu * mu / 64)
 
 
@@ -191,6 +271,19 @@ def landen_sncndn(x, g, omg, inv_scale, mu):
 
     where ``s, c, d`` are the functions of the next (smaller) parameter at
     argument ``x / prod(1 + g)``; the base level uses A&S 16.13.1-3.
+
+    Examples
+    --------
+    >>> from scipy.special import ellipj
+    >>> m = np.array([0.5, 0.99])
+    >>> g, omg, scale, mu = landen_chain(m, 1 - m)
+    >>> x = 0.3 * k_from_chain(scale, mu).astype(float)          # inside [0, K/2]
+    >>> s, c, d = landen_sncndn(x, g, omg, (1 / scale).astype(float), mu.astype(float))
+    >>> sj, cj, dj, _ = ellipj(x, m)
+    >>> bool(np.allclose([s, c, d], [sj, cj, dj], rtol=0, atol=1e-15))
+    True
+    >>> bool(np.allclose(s**2 + c**2, 1.0, rtol=0, atol=4e-16))
+    True
     """
     v = x * inv_scale
     s0 = np.sin(v)
@@ -221,6 +314,14 @@ def cel(kc, p, a, b):
     so ``K = cel(k', 1, 1, 1)`` and ``Pi(n|m) = cel(k', 1 - n, 1, 1)``.  The
     complementary modulus enters directly, so nothing cancels near ``m = 1``;
     convergence is quadratic (Bulirsch 1969; Numerical Recipes §6.11).
+
+    Examples
+    --------
+    >>> from scipy.special import ellipk
+    >>> m = np.array([0.5, 0.99])
+    >>> K = cel(np.sqrt(1 - m), 1, 1, 1)            # K(m) = cel(k', 1, 1, 1)
+    >>> bool(np.allclose(K.astype(float), ellipk(m), rtol=4e-16, atol=0))
+    True
     """
     kc, p, a, b = np.broadcast_arrays(*(np.asarray(z, dtype=LD) for z in (kc, p, a, b)))
     qc = np.abs(kc).copy()

@@ -683,6 +683,16 @@ class Diagnosis:
         Rates and L in principal components.
     angular_momentum_inertial : ndarray (3,) or None
         L in the inertial frame (from :func:`diagnose`).
+
+    Examples
+    --------
+    >>> d = diagnose_principal([0.61, 0.965, 1.0], [0.02, 0.0, 0.1])
+    >>> d.regime, round(d.separatrix_distance, 6)         # short-axis mode, m1 > 0
+    ('SAM', 0.752514)
+    >>> bool(0.965 < d.dynamic_inertia < 1.0)             # B < L^2/2E < C
+    True
+    >>> diagnose_principal([0.61, 0.965, 1.0], [0.0, 0.0, 1.0]).regime
+    'PA-short'
     """
 
     regime: str
@@ -713,7 +723,15 @@ class Diagnosis:
 
 def branch_of(moments, omega0):
     """Propagation branch names (``"precession"``, ``"separatrix"``, ``"SAM"``,
-    ``"LAM"``) that :func:`free_rotation` uses, for (..., 3) inputs."""
+    ``"LAM"``) that :func:`free_rotation` uses, for (..., 3) inputs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> omega = np.array([[0.02, 0.0, 0.1], [0.1, 0.0, 0.02], [0.0, 0.0, 1.0]])
+    >>> branch_of(np.array([0.61, 0.965, 1.0]), omega).tolist()
+    ['SAM', 'LAM', 'precession']
+    """
     moments = np.asarray(moments, dtype=float)
     omega0 = np.asarray(omega0, dtype=float)
     batch, I, w, _, _ = check_inputs(moments, [0.0, 0.0, 0.0, 1.0], omega0, [0.0])
@@ -760,6 +778,19 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
     ``P_polhode = P_psi = 4 K(m) / lambda`` and ``P_phi = 2 pi / <phi'>`` with, for SAM,
     ``<phi'> = L/C + L (C-A)/(A C) * Pi(-nu | m) / K(m)``, ``nu = C(B-A)/(A(C-B))``,
     and for LAM the same with A and C exchanged (docs/torquefree.md, TF 31-33).
+
+    Examples
+    --------
+    >>> import math
+    >>> d = diagnose_principal([1.0, 1.0, 2.0], [0.1, 0.0, 1.0])    # axisymmetric
+    >>> d.regime
+    'axisymmetric'
+    >>> L = math.hypot(0.1, 2.0)                # precession period 2 pi A / |L|
+    >>> bool(math.isclose(d.periods["precession"], 2 * math.pi / L, rel_tol=1e-14))
+    True
+    >>> d = diagnose_principal([0.61, 0.965, 1.0], [0.1, 0.0, 0.02])
+    >>> d.regime, d.separatrix_distance < 0     # long-axis mode: m1 < 0
+    ('LAM', True)
     """
     if rtol_symmetry is None:
         rtol_symmetry = SYMMETRY_RTOL

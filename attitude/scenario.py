@@ -441,7 +441,19 @@ def _state(r: _Reader, table: dict, body: RigidBody) -> AttitudeState:
 class RunResult:
     """What a scenario run produced: the ephemeris, the analytic diagnosis of the initial
     state, the classification of the ephemeris (runs with torques), the conservation
-    figures, the expectation outcomes and the files written."""
+    figures, the expectation outcomes and the files written.
+
+    Examples
+    --------
+    >>> result = run_scenario(load_scenario("scenarios/dzhanibekov.toml"),
+    ...                       write_outputs=False)
+    >>> result.regime, result.ok, result.outputs
+    ('SAM', True, [])
+    >>> round(result.periods["polhode"], 4)         # the T-handle flips back every 3.31 s
+    3.3108
+    >>> sorted(result.report())
+    ['conservation', 'expect', 'outputs', 'periods', 'regime', 'scenario']
+    """
 
     scenario: Scenario
     ephemeris: Any
@@ -509,6 +521,19 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
     regime and periods are measured ones.  ``write_outputs=False`` writes no file (what
     ``attitude check`` does).  An ensemble scenario runs on ``client`` (a dask client)
     when one is given, else in this process (:func:`ensemble_summary`).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> sc = load_scenario("scenarios/dzhanibekov.toml")
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "dzhanibekov.nc"
+    >>> result = run_scenario(sc, netcdf=out)
+    >>> [e["key"] for e in result.expectations if e["ok"]]
+    ['regime', 'polhode', 'angular_momentum_rel_drift', 'energy_rel_drift']
+    >>> result.outputs == [out], out.is_file()
+    (True, True)
+    >>> bool(result.conservation["energy_rel_drift"] < 1e-12)
+    True
     """
     if scenario.ensemble is not None:
         return _run_ensemble(scenario, netcdf=netcdf, write_outputs=write_outputs,
@@ -634,6 +659,12 @@ def known_variables() -> dict[str, tuple[str, bool]]:
     (:data:`~attitude.diagnostics.DIAGNOSTIC_VARIABLES`) and its scalars (conservation
     figures, ``attitude_noise``, measured periods ``period_<key>`` and their
     ``period_<key>_uncertainty``).
+
+    Examples
+    --------
+    >>> variables = known_variables()
+    >>> variables["kinetic_energy"], variables["period_polhode"]   # (units, time series?)
+    (('J', True), ('s', False))
     """
     out = {k: (v, True) for k, v in BASE_VARIABLES.items()}
     out.update({k: (v[0], True) for k, v in DIAGNOSTIC_VARIABLES.items()})
@@ -798,6 +829,18 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
     nutation range of a run with torques (extremes of ``nutation_angle`` over the run) and
     the ``[expect.variables]`` values.  Without them those entries get ``got = None``
     (a failure).
+
+    Examples
+    --------
+    >>> sc = load_scenario("scenarios/dzhanibekov.toml")    # expects SAM, polhode 3.3108 s
+    >>> drift = {"angular_momentum_rel_drift": 1e-15, "energy_rel_drift": 1e-15}
+    >>> results = check_expectations(sc, "SAM", {"polhode": 3.5}, drift)
+    >>> [r["key"] for r in results if not r["ok"]]            # 3.5 s is off by 6 %
+    ['polhode']
+    >>> len(results)
+    4
+    >>> round(results[1]["tolerance"], 8)                       # rel_tol 1e-4 of 3.3108 s
+    0.00033108
     """
     results = []
     for spec in scenario.expect:

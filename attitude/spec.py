@@ -311,6 +311,21 @@ def validate(doc, table: Table, *, where: str = "", path=None,
         (``error``) naming the file and the key: unknown key, missing key, wrong type,
         wrong length, empty, non-finite, wrong sign, date that does not exist, unit of
         the wrong dimension, broken rule between keys.
+
+    Examples
+    --------
+    >>> steps = Table("propagation", (
+    ...     Key("duration", "quantity", unit="s", required=True, positive=True),
+    ...     Key("step", "quantity", unit="s", positive=True),
+    ... ))
+    >>> validate({"duration": "1 h", "step": {"value": 30, "unit": "s"}}, steps)
+    {'duration': 3600.0, 'step': 30.0}
+    >>> try:
+    ...     validate({"duration": "1 h", "stepp": 30}, steps, where="propagation",
+    ...              path="run.toml")
+    ... except AttitudeError as err:
+    ...     print(err.key, "|", err.path)
+    propagation.stepp | run.toml
     """
     if not isinstance(doc, Mapping):
         raise error(f"expected a table, got {_type_name(doc)} {doc!r}"[:200], key=where or None,

@@ -70,7 +70,17 @@ OBSERVATIONS = Table("observations", (
 
 @dataclass(frozen=True)
 class ObservationsConfig:
-    """The parsed ``[observations]`` table."""
+    """The parsed ``[observations]`` table.
+
+    Examples
+    --------
+    >>> from attitude.scenario import load_scenario
+    >>> cfg = load_scenario("scenarios/tumbler_fit.toml").observations
+    >>> [type(o).__name__ for o in cfg.observations], cfg.output.name
+    (['AttitudeObservations'], 'tumbler_fit_fit.toml')
+    >>> round(float(np.degrees(cfg.observations[0].sigma)), 6)     # sigma = "0.05 deg"
+    0.05
+    """
 
     observations: tuple
     free: tuple | None
@@ -114,6 +124,21 @@ def parse_observations(table: dict, folder: Path, scenario_path: Path,
     ScenarioError
         Naming the key: unreadable or malformed files, no observations, unknown
         parameter names in ``free``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from astropy.time import Time
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (folder / "q.csv").write_text("t,qx,qy,qz,qw" + chr(10) + "0,0,0,0,1" + chr(10)
+    ...                                   + "1,0,0,0.0998,0.9950" + chr(10))
+    >>> table = {"attitude": {"file": "q.csv", "sigma": 1e-3},
+    ...          "periods": {"polhode": {"value": 27.38, "sigma": 0.07, "unit": "h"}}}
+    >>> cfg = parse_observations(table, folder, folder / "fit.toml", Time("2029-04-13"))
+    >>> [type(o).__name__ for o in cfg.observations]
+    ['AttitudeObservations', 'PeriodObservations']
+    >>> cfg.observations[0].times.tolist(), cfg.output.name
+    ([0.0, 1.0], 'fit_fit.toml')
     """
     path = str(scenario_path)
     obs = []

@@ -69,6 +69,25 @@ class Objective:
         Values of the parameters that are not free.
     free : tuple of int
         Indices (into :data:`PARAMETERS`) of the free parameters.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+    >>> truth = att.AttitudeState("2029-04-13", Rotation.from_rotvec([0.3, -0.2, 1.0]),
+    ...                           [0.05, 0.1, 1.0])
+    >>> t = np.linspace(0.0, 20.0, 40)
+    >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
+    >>> res = att.fit([att.AttitudeObservations(t, q, "0.001 deg")], body, truth,
+    ...               free=["phi0", "psi0"])
+    >>> objective = res.objective
+    >>> x = np.array([res.parameters[name] for name in res.free])
+    >>> r = objective.residuals(x)          # 40 quaternions x 3 axes + the domain penalty
+    >>> r.shape, bool(np.abs(r).max() < 1e-6)        # exact data: residuals ~ 0 at the truth
+    ((1, 121), True)
+    >>> objective.jacobian(x).shape
+    (121, 2)
     """
 
     observations: tuple
@@ -161,6 +180,24 @@ class FitResult:
         The optimum reached from every start (the guess, its mirror across the
         separatrix, psi0 + pi, ...), best first: a second regime with a chi2 close to
         the best one is an ambiguity the data do not resolve.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+    >>> truth = att.AttitudeState("2029-04-13", Rotation.from_rotvec([0.3, -0.2, 1.0]),
+    ...                           [0.05, 0.1, 1.0])
+    >>> t = np.linspace(0.0, 20.0, 40)
+    >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
+    >>> res = att.fit([att.AttitudeObservations(t, q, "0.001 deg")], body, truth,
+    ...               free=["phi0", "psi0"])
+    >>> res.success, res.regime, res.free, res.dof
+    (True, 'SAM', ('phi0', 'psi0'), 118)
+    >>> bool(res.chi2 < 1e-6)                             # noiseless data
+    True
+    >>> res.uncertainties["energy_ratio"]                 # fixed: no uncertainty
+    0.0
     """
 
     success: bool

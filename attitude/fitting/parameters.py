@@ -3,14 +3,14 @@
 A torque-free rotation is fixed by eight numbers in the parameterisation of Pravec et
 al. (2005, 2014), the one :meth:`attitude.Ensemble.sample` uses:
 
-=======================  ==============================================================
+======================== ==============================================================
 ``angular_momentum_ra``  right ascension of L, inertial frame (rad)
 ``angular_momentum_dec`` declination of L (rad)
 ``energy_ratio``         E/E0, E0 = L^2/(2C) the energy of a spin about C with the same L
 ``ratio_a``, ``ratio_b`` A/C and B/C
 ``precession_period``    P_phi, the mean period of the reference axis about L (s)
 ``phi0``, ``psi0``       precession and rotation angles of the reference axis at the epoch
-=======================  ==============================================================
+======================== ==============================================================
 
 The reference axis is C in SAM (E/E0 < C/B) and A in LAM.  :func:`free_parameters` reads
 them off a body and a state; :class:`RotationModel` goes back, for many parameter

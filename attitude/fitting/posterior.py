@@ -35,6 +35,24 @@ class Posterior:
         the chain is too short to estimate it).
     acceptance_fraction : float
         Mean over walkers.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+    >>> truth = att.AttitudeState("2029-04-13", Rotation.from_rotvec([0.3, -0.2, 1.0]),
+    ...                           [0.05, 0.1, 1.0])
+    >>> t = np.linspace(0.0, 20.0, 40)
+    >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
+    >>> res = att.fit([att.AttitudeObservations(t, q, "0.001 deg")], body, truth,
+    ...               free=["phi0", "psi0"])
+    >>> post = sample_posterior(res, n_walkers=8, n_steps=60, rng=1)
+    >>> dict(post.samples.sizes), sorted(post.samples.data_vars)    # burn-in: 15 steps
+    ({'step': 45, 'walker': 8}, ['phi0', 'psi0', 'regime'])
+    >>> low, median, high = post.intervals(0.95)["psi0"]
+    >>> bool(low < res.parameters["psi0"] < high)
+    True
     """
 
     samples: xr.Dataset
@@ -95,6 +113,25 @@ def sample_posterior(result: FitResult, observations=None, *, n_walkers: int = 3
     ------
     MissingDependencyError
         Without emcee: ``pip install "attitude-dynamics[fitting]"``.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+    >>> truth = att.AttitudeState("2029-04-13", Rotation.from_rotvec([0.3, -0.2, 1.0]),
+    ...                           [0.05, 0.1, 1.0])
+    >>> t = np.linspace(0.0, 20.0, 40)
+    >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
+    >>> res = att.fit([att.AttitudeObservations(t, q, "0.001 deg")], body, truth,
+    ...               free=["phi0", "psi0"])
+    >>> post = sample_posterior(res, n_walkers=8, n_steps=60, rng=1)
+    >>> regimes = set(post.samples.regime.values.ravel().tolist())
+    >>> bool(0.0 < post.acceptance_fraction < 1.0), regimes
+    (True, {'SAM'})
+    >>> offset = float(post.samples.psi0.median()) - res.parameters["psi0"]
+    >>> bool(abs(offset) < res.uncertainties["psi0"])   # centred on the fit, within 1 sigma
+    True
     """
     try:
         import emcee  # optional dependency (the fitting extra)

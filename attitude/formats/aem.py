@@ -1706,6 +1706,22 @@ def convert(in_path: str | PathLike, out_path: str | PathLike, **options) -> Pat
     -------
     Path
         The output file.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.arange(0.0, 600.0, 60.0))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> nc = eph.to_netcdf(folder / "tumbler.nc")
+    >>> aem = convert(nc, folder / "tumbler.aem", object_name="TUMBLER")
+    >>> aem.read_text().splitlines()[0]
+    'CCSDS_AEM_VERS = 2.0'
+    >>> back = read_aem(aem)                      # the quaternions survive the round trip
+    >>> bool(np.all((back.rotation * eph.rotation.inv()).magnitude() < 1e-12))
+    True
     """
     in_path, out_path = Path(in_path), Path(out_path)
     read_opts = {k: options.pop(k) for k in _READ_OPTIONS if k in options}

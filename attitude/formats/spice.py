@@ -54,7 +54,22 @@ _MONTHS = ("JAN", "FEB", "MAR", "APR", "MAY", "JUN", "JUL", "AUG", "SEP", "OCT",
 
 @dataclass(frozen=True)
 class CKFiles:
-    """Paths of the kernels written by :func:`write_ck`."""
+    """Paths of the kernels written by :func:`write_ck`.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.arange(0.0, 600.0, 60.0))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> files = write_ck(eph, folder / "tumbler.bc")
+    >>> [p.name for p in files.kernels]
+    ['tumbler.tls', 'tumbler.tsc', 'tumbler.tf', 'tumbler.bc']
+    >>> files.instrument_id, files.body_frame, files.reference_frame
+    (-999000, 'SC_BODY_1', 'J2000')
+    """
 
     ck: Path
     sclk: Path
@@ -105,6 +120,23 @@ def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
 
     The kernels are written in a temporary folder next to ``path`` and moved into place
     only when all are complete.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.arange(0.0, 600.0, 60.0))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> import spiceypy as sp
+    >>> files = write_ck(eph, folder / "tumbler.bc")
+    >>> sp.furnsh([str(p) for p in files.kernels])
+    >>> ticks = 120.0 * TICKS_PER_SECOND               # the sample at t = 120 s
+    >>> cmat, _ = sp.ckgp(files.instrument_id, ticks, 0.0, "J2000")
+    >>> sp.kclear()
+    >>> bool(np.allclose(cmat, eph.rotation[2].as_matrix().T, rtol=0, atol=1e-15))
+    True
     """
     sp = _spiceypy()
     if eph.is_batch:
@@ -318,7 +350,16 @@ def _write_lsk(target: Path, lsk) -> None:
 def leapseconds_kernel_text() -> str:
     """A SPICE leap-seconds kernel (LSK) built from astropy's leap-second table (the IERS
     table bundled with astropy, else erfa's), with the constants of NAIF's naif0012.tls
-    (``DELTA_T_A``, ``K``, ``EB``, ``M``)."""
+    (``DELTA_T_A``, ``K``, ``EB``, ``M``).
+
+    Examples
+    --------
+    >>> text = leapseconds_kernel_text()
+    >>> text.splitlines()[0]
+    'KPL/LSK'
+    >>> "37,   @2017-JAN-1" in text                     # TAI - UTC since 2017
+    True
+    """
     table = _leap_second_table()
     rows = []
     for year, month, tai_utc in table:
@@ -365,7 +406,22 @@ def convert_to_ck(in_path: str | PathLike, out_path: str | PathLike, *,
     ephemeris and write it with :func:`write_ck`.  ``object_id`` is the NAIF ID (a negative
     integer, default -999), ``body_frame`` the SPICE body-frame name (default SC_BODY_1),
     ``frame`` the SPICE reference frame (default from the ephemeris frame); ``object_name``
-    goes to the CK comments.  Returns the ``.bc`` path."""
+    goes to the CK comments.  Returns the ``.bc`` path.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+    >>> eph = att.propagate(body, state, np.arange(0.0, 600.0, 60.0))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> nc = eph.to_netcdf(folder / "tumbler.nc")
+    >>> convert_to_ck(nc, folder / "tumbler.bc", object_id=-77).name
+    'tumbler.bc'
+    >>> sorted(p.suffix for p in folder.iterdir())
+    ['.bc', '.nc', '.tf', '.tls', '.tm', '.tsc']
+    """
     in_path, out_path = Path(in_path), Path(out_path)
     unknown = {k: v for k, v in options.items() if v is not None}
     if unknown:

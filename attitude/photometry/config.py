@@ -320,7 +320,40 @@ _KEYS = ("shape", "axes", "length_unit", "subdivisions", "law", "materials", "su
 
 @dataclass(frozen=True, eq=False)
 class PhotometryConfig:
-    """A parsed ``[photometry]`` table with the lightcurve expectations."""
+    """A parsed ``[photometry]`` table with the lightcurve expectations.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from attitude.scenario import load_scenario
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
+    >>> _ = path.write_text('''
+    ... [body]
+    ... principal_moments = [1.0, 2.0, 2.5]
+    ... [state]
+    ... epoch = "2024-01-01"
+    ... omega_body = { value = [0, 0, 1], unit = "cycle/h" }
+    ... [propagation]
+    ... duration = "3 h"
+    ... step = "2 min"
+    ... [photometry]
+    ... shape = "ellipsoid"
+    ... subdivisions = 1
+    ... law = "lambert"
+    ... sun = [1.0, 0.0, 0.3]
+    ... observer = [1.0, 0.2, 0.3]
+    ... periods = 1
+    ... order = 2
+    ... [expect]
+    ... lightcurve_period = { value = 1.0, unit = "h", rel_tol = 1e-3 }
+    ... ''')
+    >>> sc = load_scenario(path)          # a triaxial ellipsoid spinning once an hour
+    >>> cfg = sc.photometry
+    >>> len(cfg.shape.faces), cfg.law.name, cfg.periods, cfg.order
+    (80, 'lambert', 1, 2)
+    >>> cfg.expect[0]["key"], cfg.expect[0]["scale"]        # hours -> seconds
+    ('lightcurve_period', 3600.0)
+    """
 
     shape: Any
     law: Any
@@ -535,7 +568,41 @@ def _expect(expect, path):
 
 @dataclass(frozen=True, eq=False)
 class LightcurveRun:
-    """What ``attitude lightcurve`` computed."""
+    """What ``attitude lightcurve`` computed.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from attitude.scenario import load_scenario
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
+    >>> _ = path.write_text('''
+    ... [body]
+    ... principal_moments = [1.0, 2.0, 2.5]
+    ... [state]
+    ... epoch = "2024-01-01"
+    ... omega_body = { value = [0, 0, 1], unit = "cycle/h" }
+    ... [propagation]
+    ... duration = "3 h"
+    ... step = "2 min"
+    ... [photometry]
+    ... shape = "ellipsoid"
+    ... subdivisions = 1
+    ... law = "lambert"
+    ... sun = [1.0, 0.0, 0.3]
+    ... observer = [1.0, 0.2, 0.3]
+    ... periods = 1
+    ... order = 2
+    ... [expect]
+    ... lightcurve_period = { value = 1.0, unit = "h", rel_tol = 1e-3 }
+    ... ''')
+    >>> sc = load_scenario(path)          # a triaxial ellipsoid spinning once an hour
+    >>> run = run_lightcurve(sc, sc.photometry)
+    >>> run.ok, run.outputs
+    (True, [])
+    >>> report = run.report()
+    >>> round(report["lightcurve_period_h"], 3), bool(report["amplitude_mag"] > 0.1)
+    (1.0, True)
+    """
 
     lightcurve: Lightcurve
     fit: PeriodFit
@@ -570,6 +637,38 @@ def run_lightcurve(scenario, config: PhotometryConfig, *, output=None,
         Overrides ``[photometry].output``.
     write : bool
         Write the netCDF file (when an output is set).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from attitude.scenario import load_scenario
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
+    >>> _ = path.write_text('''
+    ... [body]
+    ... principal_moments = [1.0, 2.0, 2.5]
+    ... [state]
+    ... epoch = "2024-01-01"
+    ... omega_body = { value = [0, 0, 1], unit = "cycle/h" }
+    ... [propagation]
+    ... duration = "3 h"
+    ... step = "2 min"
+    ... [photometry]
+    ... shape = "ellipsoid"
+    ... subdivisions = 1
+    ... law = "lambert"
+    ... sun = [1.0, 0.0, 0.3]
+    ... observer = [1.0, 0.2, 0.3]
+    ... periods = 1
+    ... order = 2
+    ... [expect]
+    ... lightcurve_period = { value = 1.0, unit = "h", rel_tol = 1e-3 }
+    ... ''')
+    >>> sc = load_scenario(path)          # a triaxial ellipsoid spinning once an hour
+    >>> run = run_lightcurve(sc, sc.photometry, output=path.with_suffix(".nc"))
+    >>> bool(abs(run.fit.lightcurve_period / 3600.0 - 1.0) < 1e-3)  # the rotation period
+    True
+    >>> run.outputs[0].name, len(run.lightcurve.magnitude)
+    ('spin.nc', 91)
     """
     step = config.cadence or scenario.step
     times = np.arange(0.0, scenario.duration + 0.5 * step, step)
@@ -601,7 +700,39 @@ def run_lightcurve(scenario, config: PhotometryConfig, *, output=None,
 
 
 def check_lightcurve(specs, fit: PeriodFit, lc: Lightcurve) -> list[dict]:
-    """Compare the lightcurve expectations with the fit."""
+    """Compare the lightcurve expectations with the fit.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from attitude.scenario import load_scenario
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
+    >>> _ = path.write_text('''
+    ... [body]
+    ... principal_moments = [1.0, 2.0, 2.5]
+    ... [state]
+    ... epoch = "2024-01-01"
+    ... omega_body = { value = [0, 0, 1], unit = "cycle/h" }
+    ... [propagation]
+    ... duration = "3 h"
+    ... step = "2 min"
+    ... [photometry]
+    ... shape = "ellipsoid"
+    ... subdivisions = 1
+    ... law = "lambert"
+    ... sun = [1.0, 0.0, 0.3]
+    ... observer = [1.0, 0.2, 0.3]
+    ... periods = 1
+    ... order = 2
+    ... [expect]
+    ... lightcurve_period = { value = 1.0, unit = "h", rel_tol = 1e-3 }
+    ... ''')
+    >>> sc = load_scenario(path)          # a triaxial ellipsoid spinning once an hour
+    >>> run = run_lightcurve(sc, sc.photometry, write=False)
+    >>> spec = dict(sc.photometry.expect[0], expected=1.1)   # a wrong period: 1.1 h
+    >>> [(r["key"], r["ok"]) for r in check_lightcurve([spec], run.fit, run.lightcurve)]
+    [('lightcurve_period', False)]
+    """
     results = []
     for spec in specs:
         name, scale = spec["key"], spec["scale"]

@@ -118,6 +118,16 @@ class PeriodFit:
     order, n_periods : int
     note : str
         What the periods are and are not.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 4 * 86400.0, 800)
+    >>> y = 0.2 * np.cos(2 * np.pi * t / 21600.0) + 0.1 * np.cos(2 * np.pi * t / 50000.0)
+    >>> fit = fit_periods(t, y, n_periods=2, order=2)
+    >>> np.round(fit.periods, 3).tolist(), fit.strongest       # 21600 s is 2 f1
+    ([43200.0, 50000.0], (2, 0))
+    >>> round(fit.lightcurve_period, 3)
+    43200.0
     """
 
     periods: np.ndarray

@@ -46,7 +46,20 @@ def _hours(t):
 
 
 def lightcurve_figure(lc: Lightcurve, fit: PeriodFit | None = None):
-    """Magnitude against time (hours), with the fitted model when given."""
+    """Magnitude against time (hours), with the fitted model when given.
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Lightcurve, fit_periods
+    >>> t = np.linspace(0.0, 4 * 86400.0, 800)
+    >>> y = 0.2 * np.cos(2 * np.pi * t / 21600.0) + 0.1 * np.cos(2 * np.pi * t / 50000.0)
+    >>> lc = Lightcurve.from_arrays(t, magnitude=y, epoch=Time("2024-01-01"))
+    >>> fit = fit_periods(t, y, n_periods=2, order=2)
+    >>> fig = lightcurve_figure(lc, fit)
+    >>> len(fig.axes[0].lines)                          # the data and the model
+    2
+    """
     fig = _figure(figsize=(8, 3.5), layout="constrained")
     ax = fig.add_subplot()
     ax.plot(_hours(lc.time), lc.magnitude, ".", ms=2, label="lightcurve")
@@ -61,7 +74,19 @@ def lightcurve_figure(lc: Lightcurve, fit: PeriodFit | None = None):
 
 
 def periodogram_figure(lc: Lightcurve, fit: PeriodFit | None = None):
-    """Lomb-Scargle power against frequency (cycles/day), the fitted terms marked."""
+    """Lomb-Scargle power against frequency (cycles/day), the fitted terms marked.
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Lightcurve, fit_periods
+    >>> t = np.linspace(0.0, 4 * 86400.0, 800)
+    >>> y = 0.2 * np.cos(2 * np.pi * t / 21600.0) + 0.1 * np.cos(2 * np.pi * t / 50000.0)
+    >>> lc = Lightcurve.from_arrays(t, magnitude=y, epoch=Time("2024-01-01"))
+    >>> fit = fit_periods(t, y, n_periods=2, order=2)
+    >>> periodogram_figure(lc, fit).axes[0].get_xlabel()
+    'frequency (cycles/day)'
+    """
     from astropy.timeseries import LombScargle  # costly import: only for this figure
 
     t = lc.time
@@ -82,7 +107,19 @@ def periodogram_figure(lc: Lightcurve, fit: PeriodFit | None = None):
 
 
 def folded_figure(lc: Lightcurve, fit: PeriodFit):
-    """The lightcurve folded on the double-peaked period."""
+    """The lightcurve folded on the double-peaked period.
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Lightcurve, fit_periods
+    >>> t = np.linspace(0.0, 4 * 86400.0, 800)
+    >>> y = 0.2 * np.cos(2 * np.pi * t / 21600.0) + 0.1 * np.cos(2 * np.pi * t / 50000.0)
+    >>> lc = Lightcurve.from_arrays(t, magnitude=y, epoch=Time("2024-01-01"))
+    >>> fit = fit_periods(t, y, n_periods=2, order=2)
+    >>> folded_figure(lc, fit).axes[0].get_xlabel()       # folded on 2 / f_strongest
+    'phase (P = 12.0000 h)'
+    """
     period = fit.lightcurve_period
     fig = _figure(figsize=(6, 3.5), layout="constrained")
     ax = fig.add_subplot()
@@ -95,7 +132,19 @@ def folded_figure(lc: Lightcurve, fit: PeriodFit):
 
 
 def frequency_map_figure(fit: PeriodFit):
-    """Amplitude of each term ``j f1 + k f2`` on the (j, k) lattice."""
+    """Amplitude of each term ``j f1 + k f2`` on the (j, k) lattice.
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Lightcurve, fit_periods
+    >>> t = np.linspace(0.0, 4 * 86400.0, 800)
+    >>> y = 0.2 * np.cos(2 * np.pi * t / 21600.0) + 0.1 * np.cos(2 * np.pi * t / 50000.0)
+    >>> lc = Lightcurve.from_arrays(t, magnitude=y, epoch=Time("2024-01-01"))
+    >>> fit = fit_periods(t, y, n_periods=2, order=2)
+    >>> frequency_map_figure(fit).axes[0].get_xlabel()
+    'j (f1 = 1/12.0000 h)'
+    """
     fig = _figure(figsize=(5, 4), layout="constrained")
     ax = fig.add_subplot()
     j = np.array([t["j"] for t in fit.terms])
@@ -114,7 +163,25 @@ def frequency_map_figure(fit: PeriodFit):
 
 def save_lightcurve_figures(lc: Lightcurve, fit: PeriodFit, stem) -> list[Path]:
     """Write ``<stem>_lightcurve.png``, ``_periodogram``, ``_folded`` and (two periods)
-    ``_frequency_map``; returns the paths."""
+    ``_frequency_map``; returns the paths.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Lightcurve, fit_periods
+    >>> t = np.linspace(0.0, 4 * 86400.0, 800)
+    >>> y = 0.2 * np.cos(2 * np.pi * t / 21600.0) + 0.1 * np.cos(2 * np.pi * t / 50000.0)
+    >>> lc = Lightcurve.from_arrays(t, magnitude=y, epoch=Time("2024-01-01"))
+    >>> fit = fit_periods(t, y, n_periods=2, order=2)
+    >>> stem = pathlib.Path(tempfile.mkdtemp()) / "tumbler"
+    >>> for path in save_lightcurve_figures(lc, fit, stem):    # two periods: four figures
+    ...     print(path.name, path.stat().st_size > 1000)
+    tumbler_lightcurve.png True
+    tumbler_periodogram.png True
+    tumbler_folded.png True
+    tumbler_frequency_map.png True
+    """
     stem = Path(stem)
     figures = {"lightcurve": lightcurve_figure(lc, fit), "periodogram":
                periodogram_figure(lc, fit), "folded": folded_figure(lc, fit)}

@@ -71,6 +71,17 @@ class ScatteringLaw:
     ``mu0`` and ``mu`` are arrays clamped at zero (a facet not lit or not seen gives
     0); ``cos_alpha`` broadcasts against them.  Laws may overwrite ``mu0`` and ``mu``
     (the hot path works in place): pass copies when you need them afterwards.
+
+    Examples
+    --------
+    >>> law = scattering_law("lommel-seeliger")
+    >>> isinstance(law, ScatteringLaw)
+    True
+    >>> mu0, mu = np.array([0.5, 1.0, 0.0]), np.array([0.5, 1.0, 0.7])
+    >>> law(mu0.copy(), mu.copy(), 1.0).tolist()   # (w/4) mu0 mu / (mu0 + mu), 0 unlit
+    [0.0625, 0.125, 0.0]
+    >>> float(law.scale * law.kernel(mu0.copy(), mu.copy(), 1.0)[1])  # the hot path split
+    0.125
     """
 
     name = "law"

@@ -42,6 +42,16 @@ def elapsed_seconds(times, epoch: Time) -> np.ndarray:
     ``times`` may be plain numbers (seconds), an astropy Quantity with a time unit, or an
     astropy ``Time`` array (converted to the epoch's scale; the difference is taken in
     two-double precision before rounding to float64).
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from astropy.time import Time
+    >>> epoch = Time("2024-01-01", scale="tdb")
+    >>> elapsed_seconds([1.0, 2.0] * u.min, epoch)
+    array([ 60., 120.])
+    >>> elapsed_seconds(Time("2024-01-01T00:00:01.5", scale="tdb"), epoch)
+    array([1.5])
     """
     if isinstance(times, Time):
         # difference taken in the epoch's scale: seconds of TDB, not of TT, for a TDB epoch

@@ -53,6 +53,16 @@ class Stability:
     planar_stable, stable : bool
         ``max |multiplier| <= 1 + tolerance``.
     tolerance : float
+
+    Examples
+    --------
+    >>> import attitude as att
+    >>> so = SpinOrbit.from_omega0(0.89, att.KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+    >>> st = so.stability()                           # synchronous state of Hyperion
+    >>> st.p, st.q, st.multipliers.shape
+    (1, 1, (6,))
+    >>> bool(abs(np.prod(st.planar_multipliers) - 1) < 1e-9)   # area-preserving map
+    True
     """
 
     p: int

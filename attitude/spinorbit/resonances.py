@@ -166,6 +166,14 @@ class Resonance:
     centre : float
         Angle (rad) of the long axis from the direction of the primary at periapsis at the
         stable centre: 0 for ``H > 0``, ``pi/2`` for ``H < 0``.
+
+    Examples
+    --------
+    >>> sync = resonance_list(0.89, 0.1)[1]             # Hyperion: omega0 = 0.89, e = 0.1
+    >>> sync.p, sync.q, sync.centre                      # long axis towards the primary
+    (1, 1, 0.0)
+    >>> bool(math.isclose(sync.half_width, 0.89 * math.sqrt(sync.H)))
+    True
     """
 
     p: int

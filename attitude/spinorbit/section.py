@@ -318,7 +318,18 @@ def mean_spin_resonance(ephemeris, orbit: KeplerOrbit, *, max_q: int = 2,
 def expectation_values(scenario, ephemeris) -> dict:
     """What the spin-orbit ``[expect]`` keys of a scenario got from its run:
     ``{"libration_amplitude": value in the expected unit, "resonance": "p:q"}`` (a key
-    whose value cannot be computed maps to None)."""
+    whose value cannot be computed maps to None).
+
+    Examples
+    --------
+    >>> from attitude.scenario import load_scenario
+    >>> sc = load_scenario("scenarios/phobos_libration.toml")    # expects 1:1 and 1.14 deg
+    >>> so = spin_orbit_of(sc.body, sc.torques)
+    >>> eph = so.propagate(np.linspace(0.0, so.orbit.period, 33))  # one orbit, locked
+    >>> got = expectation_values(sc, eph)
+    >>> got["resonance"], round(got["libration_amplitude"], 2)
+    ('1:1', 1.14)
+    """
     wanted = {e["key"]: e for e in scenario.expect if e["key"] in EXPECT_KEYS}
     if not wanted:
         return {}
@@ -346,7 +357,14 @@ def expectation_values(scenario, ephemeris) -> dict:
 
 @dataclass(frozen=True, eq=False)
 class SectionConfig:
-    """A parsed ``[section]`` table (angles in rad, rates in units of n)."""
+    """A parsed ``[section]`` table (angles in rad, rates in units of n).
+
+    Examples
+    --------
+    >>> cfg = parse_section({"angles": [0.0, 0.5], "rates": [1.0, 1.5], "n_orbits": 10})
+    >>> cfg.angles.tolist(), cfg.rates.tolist(), cfg.n_orbits, cfg.lyapunov
+    ([0.0, 0.5], [1.0, 1.5], 10, True)
+    """
 
     angles: np.ndarray
     rates: np.ndarray
@@ -548,6 +566,18 @@ def section_figure(section: xr.Dataset, *, title: str | None = None, centres=())
     ------
     PlotUnavailableError
         Without matplotlib.
+
+    Examples
+    --------
+    >>> import attitude as att
+    >>> so = att.SpinOrbit.from_omega0(0.89, att.KeplerOrbit(mu=1.0, a=1.0, e=0.1))
+    >>> cfg = parse_section({"angles": [0.0, 0.5], "rates": [1.0, 1.5], "n_orbits": 10})
+    >>> section = run_section(so, cfg)
+    >>> section.angle.shape                                 # 2 orbits, 10 crossings + start
+    (2, 11)
+    >>> fig = section_figure(section, title="Hyperion")
+    >>> fig.axes[0].get_title()
+    'Hyperion'
     """
     try:
         # matplotlib is optional (the plot extra): imported when a figure is asked for
