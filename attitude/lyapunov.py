@@ -22,6 +22,7 @@ from . import torques as tq
 from .body import RigidBody
 from .errors import ClassificationError
 from .propagation.propagator import propagate
+from .propagation.splitting import choose_step
 from .regimes import Thresholds
 from .state import AttitudeState
 
@@ -123,14 +124,25 @@ def _ftle(body, state, torques, duration, intervals, separation, rate_scale, met
     kwargs = {} if rtol is None else {"rtol": rtol}
     if method is not None:
         kwargs["method"] = method
+    # the splitting method: one step for the whole run and both trajectories (computed
+    # once, as a single propagation would), each trajectory on the one-body fast path
+    apart = bool(torques) and method == "splitting"
+    if apart:
+        kwargs["step"] = choose_step(body, q, w, torques)
     for k in range(intervals):
         t0 = k * tau
         tq_k = [_shift_torque(x, t0) for x in torques] if torques else None
         s1 = AttitudeState(state.epoch, Rotation.from_quat(q), w, state.frame)
         s2 = AttitudeState(state.epoch, Rotation.from_quat(qp), wp, state.frame)
-        eph = propagate([body, body], [s1, s2], [tau], torques=tq_k, **kwargs)
-        Q = eph.dataset["quaternion"].values[:, -1]
-        W = eph.dataset["angular_velocity"].values[:, -1]
+        if apart:
+            ends = [propagate(body, s, [tau], torques=tq_k, **kwargs).dataset
+                    for s in (s1, s2)]
+            Q = np.stack([e["quaternion"].values.reshape(-1, 4)[-1] for e in ends])
+            W = np.stack([e["angular_velocity"].values.reshape(-1, 3)[-1] for e in ends])
+        else:
+            eph = propagate([body, body], [s1, s2], [tau], torques=tq_k, **kwargs)
+            Q = eph.dataset["quaternion"].values[:, -1]
+            W = eph.dataset["angular_velocity"].values[:, -1]
         dr = (Rotation.from_quat(Q[0]).inv() * Rotation.from_quat(Q[1])).as_rotvec()
         dw = (W[1] - W[0]) / ws
         d = math.sqrt(float(dr @ dr + dw @ dw))
