@@ -471,7 +471,9 @@ class SumTorque(TorqueModel):
         return float(rate) if np.ndim(rate) == 0 else rate
 
     def shifted(self, dt: float) -> SumTorque:
-        """The sum of the shifted terms."""
+        """The sum of the shifted terms (itself for ``dt = 0``)."""
+        if float(dt) == 0.0:
+            return self
         return SumTorque(*[term.shifted(dt) for term in self.terms])
 
     def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:

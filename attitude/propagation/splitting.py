@@ -804,7 +804,10 @@ def _variation_rates(model, system: _System, t0: float, q_p, w_p, order: int
     """How fast the model's torque, in inertial axes, varies along the exact free flow
     (time frozen), rad/s, per body: ``max_j (|d^j M / ds^j| / |M|)^(1/j)`` for
     ``j = 1, 2`` and, above order 2, 4, from central differences over the free flow at
-    spacing ``0.05 / |omega|``."""
+    spacing ``0.05 / |omega|``.  Differences at the level of their rounding count as
+    zero: a relative variation below ~1e-7 of the torque is not resolved, and need not
+    be (sampled at any step it moves the result by about that fraction of the torque's
+    effect)."""
     spin = np.sqrt(np.sum(w_p * w_p, axis=1))
     moving = spin > 0
     delta = np.where(moving, 0.05 / np.where(moving, spin, 1.0), 0.0)
@@ -821,14 +824,16 @@ def _variation_rates(model, system: _System, t0: float, q_p, w_p, order: int
     d = np.where(ok, delta, 1.0)
     sc = np.where(ok, scale, 1.0)
 
-    def rel(x):
-        return np.sqrt(np.sum(x * x, axis=1)) / sc
+    def rel(x, weight):
+        # above the rounding of the differences (|coefficients| * a generous 64 eps)
+        size = np.sqrt(np.sum(x * x, axis=1)) / sc
+        return np.maximum(size - 64.0 * _EPS * weight, 0.0)
 
-    nu = np.maximum(rel(torque[1] - torque[-1]) / (2.0 * d),
-                    np.sqrt(rel(torque[1] - 2.0 * torque[0] + torque[-1])) / d)
+    nu = np.maximum(rel(torque[1] - torque[-1], 2.0) / (2.0 * d),
+                    np.sqrt(rel(torque[1] - 2.0 * torque[0] + torque[-1], 4.0)) / d)
     if order > 2:
         d4 = torque[2] - 4.0 * torque[1] + 6.0 * torque[0] - 4.0 * torque[-1] + torque[-2]
-        nu = np.maximum(nu, rel(d4) ** 0.25 / d)
+        nu = np.maximum(nu, rel(d4, 16.0) ** 0.25 / d)
     return np.where(ok, np.minimum(nu, spin), 0.0)
 
 
