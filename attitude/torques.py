@@ -834,7 +834,7 @@ class EnergyDissipation(TorqueModel):
     .. [1] Sharma, I., Burns, J. A. & Hui, C.-Y. (2005). Nutational damping times in
        solids of revolution. *MNRAS* 359, 79-92.
     .. [2] Breiter, S., Rozek, A. & Vokrouhlicky, D. (2012). Stress field and spin axis
-       relaxation for inelastic triaxial ellipsoids. *MNRAS* 427, 755-769.
+       relaxation for inelastic triaxial ellipsoids. *MNRAS* 427, 755.
     .. [3] Bloch, A. M., Krishnaprasad, P. S., Marsden, J. E. & Ratiu, T. S. (1996).
        The Euler-Poincare equations and double bracket dissipation. *Commun. Math.
        Phys.* 175, 1-42.
