@@ -31,15 +31,22 @@ A plain Python function with this signature is a valid model.  Models derived fr
 is a :class:`SumTorque`); :func:`as_torque_model` wraps a plain function so that it can
 take part in a sum.  Each model says whether it depends on the angular velocity
 (:attr:`TorqueModel.velocity_dependent`): splitting integrators may treat
-velocity-independent (conservative) torques as pure kicks.
+velocity-independent (conservative) torques as pure kicks; whether it is internal
+(:attr:`TorqueModel.internal`: exerted by one part of the body on another, so that the
+integrators keep the inertial angular momentum fixed); its own time scale
+(:meth:`TorqueModel.characteristic_rate`, from which the splitting integrator builds its
+default step) and how to move its time origin (:meth:`TorqueModel.shifted`, for runs
+restarted mid-way).  The integrators and the Lyapunov test use nothing else, so a
+user's subclass is treated like the built-in models.
 
 Built-in models
 ---------------
 ============================  ========================================================
 :class:`GravityGradient`      point-mass primary, ``3 mu / r^5 (r x I r)``
 :class:`ConstantTorque`       fixed torque in body or inertial axes
-:class:`EnergyDissipation`    internal energy sink (damper, fuel slosh): keeps ``|L|``,
-                              bleeds kinetic energy toward ``L^2 / 2C`` in a time constant
+:class:`EnergyDissipation`    internal energy sink (damper, inelastic asteroid): keeps
+                              the inertial ``L``, bleeds kinetic energy toward ``L^2 / 2C``
+                              in a time constant (:func:`damping_timescale` for asteroids)
 :class:`EddyCurrentDamping`   ``(M (ω x B)) x B`` in a uniform or tilted-dipole field
 :class:`HeavyTopPivot`        uniform gravity about a fixed pivot (the heavy top)
 ============================  ========================================================

@@ -16,8 +16,11 @@ the attitude only (gravity gradient, constant, heavy-top pivot:
 ``velocity_dependent = False``) the kick is exact, ``omega += h I^-1 M(t, q)``, and is
 the flow of the potential energy: every composition of these flows is a Lie–Poisson
 (symplectic) map, and a symmetric composition is time-reversible.  Velocity-dependent
-torques (dissipation, eddy currents) are integrated inside the kick by a Runge–Kutta
-step with the attitude frozen (explicit midpoint for order 2, classical RK4 otherwise).
+torques (eddy currents) are integrated inside the kick by a Runge–Kutta step with the
+attitude frozen (explicit midpoint for order 2, classical RK4 otherwise).  Internal
+torques (``internal = True``: dissipation) turn ``L`` in the body frame only: their kick
+also turns the attitude, at ``(M x L)/L^2``, and ends by restoring the inertial ``L``, so
+that it does not drift (``_System.internal_kick``).
 
 Compositions (``order=`` / ``scheme=``; ``K(b h) F(a h) K(...) ...``):
 
@@ -37,7 +40,9 @@ as for ``p^2/2 + V(q)``; ~10x smaller error than S6 at the same cost), else
 ``"blanes-moan"``.  With velocity-dependent torques the order is ``min(order, 4)`` (the
 RK sub-step is of order 2 for Strang, 4 otherwise; the limit shows only when the damping
 is fast on the step).  With no torque at all every scheme is the exact solution to
-round-off.  The default step is :func:`choose_step`.  ``docs/integrators.md`` has the
+round-off.  The default step is :func:`choose_step`: set by the torques' own time scales
+(:meth:`attitude.torques.TorqueModel.characteristic_rate`) and by how fast each torque
+changes along the free motion, not by the spin.  ``docs/integrators.md`` has the
 formulas, the measured orders, accuracy and timings, and which method to use when.
 
 Time is carried in the extended phase space: the free flow advances ``t``, the kick is
