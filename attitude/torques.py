@@ -799,7 +799,7 @@ class EnergyDissipation(TorqueModel):
     the DOP853 reference in its right-hand side.  The body-frame motion of ``L`` (and
     so ``E``, the regime, the nutation angles) is the same as with an external torque
     ``M``; only the attitude differs: an external ``M`` would turn the inertial ``L``
-    (by 1.4 % over a long-axis to flat-spin relaxation), a drift of the pole that no
+    (by per cents over a long-axis to flat-spin relaxation), a drift of the pole that no
     internal mechanism can cause.
 
     **The time constant.**  ``k`` is set from ``time_constant`` ``tau`` so that near
