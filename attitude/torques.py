@@ -1325,17 +1325,33 @@ class HeavyTopPivot(TorqueModel):
         return np.asarray(mass)[..., None] * self.g * _cross(up_b, self.pivot_to_com)
 
     def characteristic_rate(self, t, quaternion, omega_body, body):
-        """``max(sqrt(m g |l| / A), m g |l| / |L|)``, rad/s: the small-swing pendulum
-        frequency about the least moment ``A`` (the time scale of a slow top) and the
-        rate at which the largest torque turns ``L`` (a fast top precesses at about
-        ``m g l / |L|``)."""
+        """``max(sqrt(m g |l| / I_swing), m g |l| / |L|)``, rad/s: the small-swing
+        pendulum frequency (``I_swing`` the least moment about an axis normal to ``l``:
+        the torque is always normal to ``l``), the time scale of a slow top, and the rate
+        at which the largest torque turns ``L`` (a fast top precesses at about
+        ``m g l / |L|``).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import HeavyTopPivot
+        >>> top = RigidBody(np.diag([9.5e-4, 9.5e-4, 2.0e-4]), mass=0.5)
+        >>> pivot = HeavyTopPivot(pivot_to_com=[0.0, 0.0, 0.04])
+        >>> round(pivot.characteristic_rate(0.0, [0, 0, 0, 1], [0, 0, 0.0], top), 3)
+        14.369
+        """
         mass = self.mass if self.mass is not None else _mass_of(body)
         if mass is None:
             raise TorqueConfigError("the body has no mass: give HeavyTopPivot a "
                                     "mass, or build the body with one", key="mass")
-        mgl = np.asarray(mass, dtype=float) * self.g * float(np.linalg.norm(self.pivot_to_com))
-        A = _moments_of(body)[..., 0]
-        L = _matvec(_inertia_of(body), np.asarray(omega_body, dtype=float))
+        length = float(np.linalg.norm(self.pivot_to_com))
+        mgl = np.asarray(mass, dtype=float) * self.g * length
+        inertia = _inertia_of(body)
+        axis = self.pivot_to_com / length
+        normal = np.eye(3) - np.outer(axis, axis)            # directions of the torque
+        A = 1.0 / np.linalg.norm(np.linalg.inv(inertia) @ normal, ord=2, axis=(-2, -1))
+        L = _matvec(inertia, np.asarray(omega_body, dtype=float))
         L_norm = np.sqrt(_dot(L, L))
         with np.errstate(divide="ignore"):
             turn = np.where(L_norm > 0, mgl / np.where(L_norm > 0, L_norm, 1.0), 0.0)
