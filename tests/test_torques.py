@@ -592,7 +592,10 @@ def test_eddy_current_sphere_in_uniform_field_closed_form():
     w0_in = state.attitude.apply(w0)
     par = w0_in @ b * b
     expected = par + (w0_in - par) * np.exp(-t / tau)[:, None]
-    np.testing.assert_allclose(w_in, expected, rtol=0, atol=1e-12)
+    # the default splitting step: for a sphere the inertial torque is fixed along the free
+    # rotation, so the step follows tau (2 s here) and the error is that of RK4 on the
+    # exponential, ~(h / tau)^5 / 120 per step: within the rule's ~1e-10 relative target
+    np.testing.assert_allclose(w_in, expected, rtol=0, atol=1e-10 * np.linalg.norm(w0))
 
 
 def test_eddy_current_tensor_constructors():
