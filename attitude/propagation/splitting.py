@@ -76,6 +76,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import special as sp
 
+from .. import quaternion as quat
 from ..body import RigidBody
 from ..errors import InvalidStateError
 from ..torques import as_torque_model
@@ -710,17 +711,17 @@ class _System:
         one[:, 3] = 1.0
 
         def field(wv, p):
-            qs = _qmul(q, p)
+            qs = quat.multiply(q, p)
             qs = qs / np.sqrt(np.sum(qs * qs, axis=1, keepdims=True))
             L = wv * moments
             a_int = self._torque(self.internal_terms, t, qs, wv)
             m_int = a_int * moments
             L2 = np.sum(L * L, axis=1, keepdims=True)
             extra = np.where(L2 > 0, _cross(m_int, L) / np.where(L2 > 0, L2, 1.0), 0.0)
-            dp = 0.5 * _qmul(p, np.concatenate([extra, np.zeros((len(p), 1))], axis=1))
+            dp = 0.5 * quat.multiply(p, np.concatenate([extra, np.zeros((len(p), 1))], axis=1))
             if external:
                 a_ext = self._torque(external, t, qs, wv)
-                return a_int + a_ext, dp, _rot(qs, a_ext * moments)
+                return a_int + a_ext, dp, quat.rotate(qs, a_ext * moments)
             return a_int, dp, None
 
         def step(y, k, c):
@@ -742,15 +743,15 @@ class _System:
             incr = tuple(None if k1[i] is None else
                          k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i] for i in range(3))
             w1, p1, le1 = step(y0, incr, tau / 6.0)
-        q1 = _qmul(q, p1)
+        q1 = quat.multiply(q, p1)
         q1 = q1 / np.sqrt(np.sum(q1 * q1, axis=1, keepdims=True))
         if anchor is not None and le1 is None:
             L_in = anchor
         else:
-            L_in = _rot(q, w * moments)
+            L_in = quat.rotate(q, w * moments)
             if le1 is not None:
                 L_in = L_in + le1
-        w1 = _rot(_conj(q1), L_in) / moments
+        w1 = quat.rotate(quat.conjugate(q1), L_in) / moments
         return q1, w1
 
 
@@ -823,7 +824,7 @@ def _variation_rates(model, system: _System, t0: float, q_p, w_p, order: int
         else:
             qk, wk = _free_flow_vec(system.free, q_p, w_p, k * delta)
         m = system._torque([model], t0, qk, wk) * system.moments
-        torque[k] = _rot(qk, m)
+        torque[k] = quat.rotate(qk, m)
     scale = np.max([np.sqrt(np.sum(m * m, axis=1)) for m in torque.values()], axis=0)
     ok = moving & (scale > 0)
     d = np.where(ok, delta, 1.0)
@@ -1291,7 +1292,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         total += sum(_n_free(ops_step, c) for c in counts)
     ops = _One(system) if n == 1 else _Batch(system)
     # internal torques alone keep the inertial L: every kick restores the initial one
-    anchor = (_rot(q_p0, w_p0 * system.moments)
+    anchor = (quat.rotate(q_p0, w_p0 * system.moments)
               if has_internal and not (has_kick or has_drag) else None)
     bar = _Progress(total, progress)
     try:
