@@ -1046,7 +1046,7 @@ class _One:
         external = self.s.kick_terms + self.s.drag_terms
         if external:                      # rare: the array version is good enough
             q1, w1 = self.s.internal_kick(t, np.array([q]), np.array([w]), tau, rk_order,
-                                          None if anchor is None else anchor)
+                                          anchor)
             return tuple(q1[0].tolist()), tuple(w1[0].tolist())
         I1, I2, I3 = (float(x) for x in self.s.moments[0])
 
@@ -1084,13 +1084,10 @@ class _One:
             w1 = tuple(o + tau / 6.0 * (a + 2.0 * b + 2.0 * c + d)
                        for o, a, b, c, d in zip(w, k1[0], k2[0], k3[0], k4[0]))
         q1 = _qmul1(q, p1)                                   # normalised
-        if anchor is not None:
-            L_in = tuple(anchor[0].tolist())
-        else:
-            L_in = _rot1(q, (w[0] * I1, w[1] * I2, w[2] * I3))
-        x, y, z, s_ = q1
-        Lb = _rot1((-x, -y, -z, s_), L_in)
         del w1                                   # superseded by the restored L
+        L_in = (anchor[0] if anchor is not None
+                else quat.rotate(np.array(q), np.array(w) * self.s.moments[0]))
+        Lb = quat.rotate(quat.conjugate(np.array(q1)), L_in).tolist()
         return q1, (Lb[0] / I1, Lb[1] / I2, Lb[2] / I3)
 
     @staticmethod
