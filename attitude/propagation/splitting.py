@@ -833,7 +833,7 @@ def _variation_rates(model, system: _System, t0: float, q_p, w_p, order: int
     def rel(x, weight):
         # above the rounding of the differences (|coefficients| * a generous 64 eps)
         size = np.sqrt(np.sum(x * x, axis=1)) / sc
-        return np.maximum(size - 64.0 * _EPS * weight, 0.0)
+        return np.maximum(size - 64.0 * np.finfo(float).eps * weight, 0.0)
 
     nu = np.maximum(rel(torque[1] - torque[-1], 2.0) / (2.0 * d),
                     np.sqrt(rel(torque[1] - 2.0 * torque[0] + torque[-1], 4.0)) / d)
