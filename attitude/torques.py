@@ -384,8 +384,10 @@ class TorqueModel:
         motion, per body (leading axes of the state), or one float.
 
         The default is measured from the torque at the given state:
-        ``max(|M| / |L|, sqrt(|I^-1 M|))`` (the rate at which it turns ``L``, and the
-        rate at which it would turn a body from rest).  Built-in models return rates
+        ``min(|M| / |L|, sqrt(|I^-1 M|))``: the rate at which it turns ``L`` (a fast
+        spinner), or, when that is faster, the rate at which it turns a body from rest
+        (a slow or resting body, whose small ``L`` the torque builds up rather than
+        turns).  Built-in models return rates
         from their parameters (orbital motion, damping time, pendulum frequency...),
         which do not vanish at an equilibrium; a user model with a time dependence of
         its own (a forcing period) should override this and include it.  The splitting
@@ -398,7 +400,7 @@ class TorqueModel:
         >>> from attitude.torques import ConstantTorque
         >>> body = RigidBody.from_principal_moments([2.0, 3.0, 4.0])
         >>> float(ConstantTorque([0.0, 0.0, 0.04]).characteristic_rate(
-        ...     0.0, [0, 0, 0, 1], [0.0, 0.0, 1.0], body))          # sqrt(0.04 / 4)
+        ...     0.0, [0, 0, 0, 1], [0.0, 0.0, 0.0], body))          # sqrt(0.04 / 4)
         0.1
         """
         q = _unit_quaternion(quaternion)
@@ -410,9 +412,10 @@ class TorqueModel:
         L_norm = np.sqrt(_dot(L, L))
         accel = np.linalg.solve(inertia, m[..., None])[..., 0] if inertia.ndim > 2 else \
             m @ np.linalg.inv(inertia).T
+        from_rest = np.sqrt(np.sqrt(_dot(accel, accel)))
         with np.errstate(divide="ignore", invalid="ignore"):
-            turn = np.where(L_norm > 0, m_norm / np.where(L_norm > 0, L_norm, 1.0), 0.0)
-        rate = np.maximum(turn, np.sqrt(np.sqrt(_dot(accel, accel))))
+            turn = np.where(L_norm > 0, m_norm / np.where(L_norm > 0, L_norm, 1.0), np.inf)
+        rate = np.minimum(turn, from_rest)
         return float(rate) if np.ndim(rate) == 0 else rate
 
     def shifted(self, dt: float) -> TorqueModel:
@@ -1325,11 +1328,11 @@ class HeavyTopPivot(TorqueModel):
         return np.asarray(mass)[..., None] * self.g * _cross(up_b, self.pivot_to_com)
 
     def characteristic_rate(self, t, quaternion, omega_body, body):
-        """``max(sqrt(m g |l| / I_swing), m g |l| / |L|)``, rad/s: the small-swing
-        pendulum frequency (``I_swing`` the least moment about an axis normal to ``l``:
-        the torque is always normal to ``l``), the time scale of a slow top, and the rate
-        at which the largest torque turns ``L`` (a fast top precesses at about
-        ``m g l / |L|``).
+        """``sqrt(m g |l| / I_swing)``, rad/s: the small-swing pendulum frequency
+        (``I_swing`` the least moment about an axis normal to ``l``: the torque is always
+        normal to ``l``), the time scale of a slow top; a fast top precesses more slowly,
+        at about ``m g l / |L|``, and the splitting step adds how fast the torque changes
+        along its nutation.
 
         Examples
         --------
@@ -1351,11 +1354,7 @@ class HeavyTopPivot(TorqueModel):
         axis = self.pivot_to_com / length
         normal = np.eye(3) - np.outer(axis, axis)            # directions of the torque
         A = 1.0 / np.linalg.norm(np.linalg.inv(inertia) @ normal, ord=2, axis=(-2, -1))
-        L = _matvec(inertia, np.asarray(omega_body, dtype=float))
-        L_norm = np.sqrt(_dot(L, L))
-        with np.errstate(divide="ignore"):
-            turn = np.where(L_norm > 0, mgl / np.where(L_norm > 0, L_norm, 1.0), 0.0)
-        rate = np.maximum(np.sqrt(mgl / A), turn)
+        rate = np.sqrt(mgl / A)
         return float(rate) if np.ndim(rate) == 0 else rate
 
     def shifted(self, dt: float) -> HeavyTopPivot:

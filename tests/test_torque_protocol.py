@@ -117,16 +117,16 @@ def test_a_user_model_gets_the_same_step_and_solution_as_the_builtin():
 
 
 def test_default_characteristic_rate():
-    """max(|M|/|L|, sqrt(|I^-1 M|)) at the state, per body for a batch."""
+    """min(|M|/|L|, sqrt(|I^-1 M|)) at the state, per body for a batch: a resting body
+    (the torque builds L up) is not given the infinite rate |M|/|L|."""
     body = att.RigidBody.from_principal_moments([2.0, 3.0, 4.0])
     m = ConstantTorque([0.0, 0.3, 0.0])                # I^-1 M = (0, 0.1, 0)
-    rate = m.characteristic_rate(0.0, [0, 0, 0, 1], [0.0, 0.0, 0.01], body)
-    assert rate == pytest.approx(0.3 / 0.04)           # |M| / |L|, L = 0.04
-    rate = m.characteristic_rate(0.0, [0, 0, 0, 1], [0.0, 0.0, 100.0], body)
-    assert rate == pytest.approx(math.sqrt(0.1))
+    for w, expected in (([0.0, 0.0, 0.0], math.sqrt(0.1)), ([0.0, 0.0, 0.01], math.sqrt(0.1)),
+                        ([0.0, 0.0, 100.0], 0.3 / 400.0)):
+        assert m.characteristic_rate(0.0, [0, 0, 0, 1], w, body) == pytest.approx(expected)
     batch = m.characteristic_rate(0.0, np.tile([0, 0, 0, 1.0], (3, 1)),
                                   [[0, 0, 0.01], [0, 0, 1.0], [0, 0, 1e3]], body)
-    np.testing.assert_allclose(batch, [7.5, math.sqrt(0.1), math.sqrt(0.1)], rtol=1e-14)
+    np.testing.assert_allclose(batch, [math.sqrt(0.1), 0.075, 7.5e-5], rtol=1e-14)
 
 
 def test_no_concrete_torque_class_in_the_step_rule_or_the_lyapunov_restarts():
