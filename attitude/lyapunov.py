@@ -10,7 +10,6 @@ Mignard 1984); the thresholds are :class:`attitude.regimes.Thresholds`.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -21,8 +20,8 @@ from scipy.spatial.transform import Rotation
 from . import torques as tq
 from .body import RigidBody
 from .errors import ClassificationError
-from .orbit import KeplerOrbit
 from .propagation.propagator import propagate
+from .propagation.splitting import choose_step
 from .quantities import to_si
 from .regimes import Thresholds
 from .state import AttitudeState
@@ -99,36 +98,13 @@ class LyapunovResult:
         return np.cumsum(self.local_exponents) / np.arange(1, self.times.size + 1)
 
 
-class _Shifted:
-    """A torque model evaluated at ``t + t0`` (keeps ``velocity_dependent``)."""
-
-    def __init__(self, inner, t0: float):
-        self.inner, self.t0 = inner, float(t0)
-        self.velocity_dependent = getattr(inner, "velocity_dependent", True)
-
-    def __call__(self, t, quaternion, omega_body, body):
-        return self.inner(np.asarray(t, dtype=float) + self.t0, quaternion, omega_body, body)
-
-    def __repr__(self) -> str:
-        return f"{self.inner!r} at t + {self.t0:.9g} s"
-
-
 def _shift_torque(torque, t0: float):
-    """The same torque for a propagation restarted ``t0`` seconds after the epoch."""
+    """The same torque for a propagation restarted ``t0`` seconds after the epoch: the
+    model's own :meth:`~attitude.torques.TorqueModel.shifted` (a plain function is
+    wrapped first), so a user's model is shifted like a built-in one."""
     if t0 == 0.0:
         return torque
-    if isinstance(torque, tq.SumTorque):
-        return tq.SumTorque(*[_shift_torque(x, t0) for x in torque.terms])
-    if isinstance(torque, (tq.EnergyDissipation, tq.ConstantTorque, tq.HeavyTopPivot)):
-        return torque
-    if isinstance(torque, tq.EddyCurrentDamping) and isinstance(torque.field,
-                                                               tq.UniformField):
-        return torque
-    if isinstance(torque, tq.GravityGradient) and isinstance(torque.orbit, KeplerOrbit):
-        o = torque.orbit
-        M = math.fmod(o.mean_anomaly + o.mean_motion * t0, 2.0 * math.pi)
-        return tq.GravityGradient(torque.mu, dataclasses.replace(o, mean_anomaly=M))
-    return _Shifted(torque, t0)
+    return tq.as_torque_model(torque).shifted(t0)
 
 
 def _batch_means(g: np.ndarray) -> float:
@@ -159,14 +135,25 @@ def _ftle(body, state, torques, duration, intervals, separation, rate_scale, met
     kwargs = {} if rtol is None else {"rtol": rtol}
     if method is not None:
         kwargs["method"] = method
+    # the splitting method: one step for the whole run and both trajectories (computed
+    # once, as a single propagation would), each trajectory on the one-body fast path
+    apart = bool(torques) and method == "splitting"
+    if apart:
+        kwargs["step"] = choose_step(body, q, w, torques)
     for k in range(intervals):
         t0 = k * tau
         tq_k = [_shift_torque(x, t0) for x in torques] if torques else None
         s1 = AttitudeState(state.epoch, Rotation.from_quat(q), w, state.frame)
         s2 = AttitudeState(state.epoch, Rotation.from_quat(qp), wp, state.frame)
-        eph = propagate([body, body], [s1, s2], [tau], torques=tq_k, **kwargs)
-        Q = eph.dataset["quaternion"].values[:, -1]
-        W = eph.dataset["angular_velocity"].values[:, -1]
+        if apart:
+            ends = [propagate(body, s, [tau], torques=tq_k, **kwargs).dataset
+                    for s in (s1, s2)]
+            Q = np.stack([e["quaternion"].values.reshape(-1, 4)[-1] for e in ends])
+            W = np.stack([e["angular_velocity"].values.reshape(-1, 3)[-1] for e in ends])
+        else:
+            eph = propagate([body, body], [s1, s2], [tau], torques=tq_k, **kwargs)
+            Q = eph.dataset["quaternion"].values[:, -1]
+            W = eph.dataset["angular_velocity"].values[:, -1]
         dr = (Rotation.from_quat(Q[0]).inv() * Rotation.from_quat(Q[1])).as_rotvec()
         dw = (W[1] - W[0]) / ws
         d = math.sqrt(float(dr @ dr + dw @ dw))
@@ -212,8 +199,10 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
     ----------
     body, state : RigidBody, AttitudeState
     torques : sequence of torque models or None
-        Time-dependent models are shifted to each interval's start (Keplerian gravity
-        gradient exactly, through the mean anomaly; others through a wrapper).
+        Time-dependent models are shifted to each interval's start with their
+        :meth:`~attitude.torques.TorqueModel.shifted` (Keplerian gravity gradient
+        exactly, through the mean anomaly; a user model through its own method or the
+        default wrapper).
     duration : float, Quantity or str
         Total time, s.
     intervals : int

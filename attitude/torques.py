@@ -31,15 +31,22 @@ A plain Python function with this signature is a valid model.  Models derived fr
 is a :class:`SumTorque`); :func:`as_torque_model` wraps a plain function so that it can
 take part in a sum.  Each model says whether it depends on the angular velocity
 (:attr:`TorqueModel.velocity_dependent`): splitting integrators may treat
-velocity-independent (conservative) torques as pure kicks.
+velocity-independent (conservative) torques as pure kicks; whether it is internal
+(:attr:`TorqueModel.internal`: exerted by one part of the body on another, so that the
+integrators keep the inertial angular momentum fixed); its own time scale
+(:meth:`TorqueModel.characteristic_rate`, from which the splitting integrator builds its
+default step) and how to move its time origin (:meth:`TorqueModel.shifted`, for runs
+restarted mid-way).  The integrators and the Lyapunov test use nothing else, so a
+user's subclass is treated like the built-in models.
 
 Built-in models
 ---------------
 ============================  ========================================================
 :class:`GravityGradient`      point-mass primary, ``3 mu / r^5 (r x I r)``
 :class:`ConstantTorque`       fixed torque in body or inertial axes
-:class:`EnergyDissipation`    internal energy sink (damper, fuel slosh): keeps ``|L|``,
-                              bleeds kinetic energy toward ``L^2 / 2C`` in a time constant
+:class:`EnergyDissipation`    internal energy sink (damper, inelastic asteroid): keeps
+                              the inertial ``L``, bleeds kinetic energy toward ``L^2 / 2C``
+                              in a time constant (:func:`damping_timescale` for asteroids)
 :class:`EddyCurrentDamping`   ``(M (ω x B)) x B`` in a uniform or tilted-dipole field
 :class:`HeavyTopPivot`        uniform gravity about a fixed pivot (the heavy top)
 ============================  ========================================================
@@ -49,7 +56,9 @@ Built-in models
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
+import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 
@@ -73,6 +82,8 @@ __all__ = [
     "GravityGradient",
     "ConstantTorque",
     "EnergyDissipation",
+    "internal_rate",
+    "damping_timescale",
     "EddyCurrentDamping",
     "HeavyTopPivot",
     "UniformField",
@@ -175,6 +186,36 @@ def _matvec(inertia: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("...ij,...j->...i", inertia, v)
 
 
+def _orbit_rate(path) -> float:
+    """Largest angular rate of the body's position about the primary, rad/s (at
+    periapsis for a Keplerian orbit, at ``t = 0`` for a path with a velocity, else 0)."""
+    if isinstance(path, KeplerOrbit):
+        e = path.e
+        return path.mean_motion * (1.0 + e) ** 2 / (1.0 - e * e) ** 1.5
+    velocity = getattr(path, "velocity", None)
+    if callable(velocity):
+        try:
+            r = np.asarray(path.position(0.0), dtype=float)
+            v = np.asarray(velocity(0.0), dtype=float)
+            return float(np.linalg.norm(np.cross(r, v)) / np.dot(r, r))
+        except Exception:  # noqa: BLE001 - a path without a usable velocity
+            return 0.0
+    return 0.0
+
+
+def _min_radius(path) -> float:
+    """Periapsis distance of a Keplerian orbit, else ``|r(0)|``, m."""
+    if isinstance(path, KeplerOrbit):
+        return path.periapsis
+    return float(np.linalg.norm(np.asarray(path.position(0.0), dtype=float)))
+
+
+def _advance(orbit: KeplerOrbit, dt: float) -> KeplerOrbit:
+    """The same Keplerian orbit with its time origin moved ``dt`` seconds later."""
+    M = math.fmod(orbit.mean_anomaly + orbit.mean_motion * dt, 2.0 * math.pi)
+    return dataclasses.replace(orbit, mean_anomaly=M)
+
+
 # --- conversions of constructor arguments -------------------------------------------------
 
 
@@ -207,20 +248,51 @@ def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
 
 
 class TorqueModel:
-    """Base class of torque models: call protocol, broadcasting and ``+``.
+    """Base class of torque models: call protocol, broadcasting, ``+`` and the hooks the
+    integrators use (time scale, time shift, internal or external).
 
     Subclasses implement :meth:`evaluate`, which receives numpy arrays (``t`` as an
     array, a unit quaternion, ``omega_body``) and returns body-frame torques that
-    broadcast over the leading axes; :meth:`__call__` does the conversions.
+    broadcast over the leading axes; :meth:`__call__` does the conversions.  The
+    integrators and the Lyapunov test use nothing but this protocol: a user's own
+    subclass gets the same treatment as the built-in models (override
+    :meth:`characteristic_rate` and :meth:`shifted` when the defaults are too generic).
 
     Attributes
     ----------
     velocity_dependent : bool
         Whether the torque depends on ``omega_body`` (dissipative models do; gravity
         gradient, constant and pivot torques do not).
+    internal : bool
+        Whether the torque is exerted by one part of the body on another (a damper, an
+        inelastic body): it can only turn ``L`` in the body frame and must keep the
+        inertial angular momentum.  Integrators then move the attitude with the body
+        frame, ``dq/dt = q (omega + (M x L)/L^2) / 2``, so that ``R L_body`` stays fixed
+        (:class:`EnergyDissipation`, docs/torques.md).  The torque must be normal to
+        ``L``.
+
+    Examples
+    --------
+    A user model: only :meth:`evaluate` is required; the defaults of
+    :meth:`characteristic_rate` and :meth:`shifted` work from it.
+
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import TorqueModel
+    >>> class Wobble(TorqueModel):
+    ...     velocity_dependent = False
+    ...     def evaluate(self, t, quaternion, omega_body, body):
+    ...         return np.stack(np.broadcast_arrays(1e-3 * np.cos(t), 0.0, 0.0), axis=-1)
+    >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> model = Wobble()
+    >>> model.shifted(np.pi)(0.0, [0, 0, 0, 1], [0.0, 0.0, 0.0], body)
+    array([-0.001,  0.   ,  0.   ])
+    >>> round(float(model.characteristic_rate(0.0, [0, 0, 0, 1], [0.0, 0.0, 0.0], body)), 4)
+    0.0316
     """
 
     velocity_dependent: bool = True
+    internal: bool = False
 
     def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
         """Body-frame torque, N m, shape ``broadcast(t, quaternion[..., 0],
@@ -240,6 +312,64 @@ class TorqueModel:
         scalar-last, body -> inertial), ``omega_body`` (rad/s); body-frame N m, broadcast
         over the leading axes.  Subclasses implement this."""
         raise NotImplementedError(f"{type(self).__name__} must implement evaluate()")
+
+    def characteristic_rate(self, t, quaternion, omega_body, body) -> np.ndarray | float:
+        """The torque's own time scale: the fastest rate (rad/s) at which it changes the
+        motion, per body (leading axes of the state), or one float.
+
+        The default is measured from the torque at the given state:
+        ``min(|M| / |L|, sqrt(|I^-1 M|))``: the rate at which it turns ``L`` (a fast
+        spinner), or, when that is faster, the rate at which it turns a body from rest
+        (a slow or resting body, whose small ``L`` the torque builds up rather than
+        turns).  Built-in models return rates
+        from their parameters (orbital motion, damping time, pendulum frequency...),
+        which do not vanish at an equilibrium; a user model with a time dependence of
+        its own (a forcing period) should override this and include it.  The splitting
+        integrator adds how fast the torque varies along the free motion itself
+        (:func:`attitude.propagation.splitting.choose_step`).
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import ConstantTorque
+        >>> body = RigidBody.from_principal_moments([2.0, 3.0, 4.0])
+        >>> float(ConstantTorque([0.0, 0.0, 0.04]).characteristic_rate(
+        ...     0.0, [0, 0, 0, 1], [0.0, 0.0, 0.0], body))          # sqrt(0.04 / 4)
+        0.1
+        """
+        q = _unit_quaternion(quaternion)
+        w = np.asarray(omega_body, dtype=float)
+        m = np.asarray(self(t, q, w, body), dtype=float)
+        inertia = _inertia_of(body)
+        L = _matvec(inertia, w)
+        m_norm = np.sqrt(_dot(m, m))
+        L_norm = np.sqrt(_dot(L, L))
+        accel = np.linalg.solve(inertia, m[..., None])[..., 0] if inertia.ndim > 2 else \
+            m @ np.linalg.inv(inertia).T
+        from_rest = np.sqrt(np.sqrt(_dot(accel, accel)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            turn = np.where(L_norm > 0, m_norm / np.where(L_norm > 0, L_norm, 1.0), np.inf)
+        rate = np.minimum(turn, from_rest)
+        return float(rate) if np.ndim(rate) == 0 else rate
+
+    def shifted(self, dt: float) -> TorqueModel:
+        """The same model with its time origin moved by ``dt`` seconds: the result at
+        ``t`` is this model's at ``t + dt`` (what a propagation restarted ``dt`` after
+        the epoch needs).  The default wraps the model; built-in models return a model
+        of their own class (a Keplerian orbit with its mean anomaly advanced...), or
+        themselves when they do not depend on time.
+
+        Examples
+        --------
+        >>> from attitude.torques import ConstantTorque
+        >>> m = ConstantTorque([0.0, 0.0, 1e-3])
+        >>> m.shifted(60.0) is m                  # no time dependence
+        True
+        """
+        dt = float(dt)
+        if dt == 0.0:
+            return self
+        return _ShiftedTorque(self, dt)
 
     def __add__(self, other):
         try:
@@ -274,6 +404,21 @@ class SumTorque(TorqueModel):
             flat.extend(term.terms if isinstance(term, SumTorque) else [term])
         self.terms = tuple(flat)
         self.velocity_dependent = any(t.velocity_dependent for t in self.terms)
+        # a sum is internal only if every term is (integrators take sums apart anyway)
+        self.internal = bool(self.terms) and all(t.internal for t in self.terms)
+
+    def characteristic_rate(self, t, quaternion, omega_body, body):
+        """The fastest of the terms' rates."""
+        rate = 0.0
+        for term in self.terms:
+            rate = np.maximum(rate, term.characteristic_rate(t, quaternion, omega_body, body))
+        return float(rate) if np.ndim(rate) == 0 else rate
+
+    def shifted(self, dt: float) -> SumTorque:
+        """The sum of the shifted terms (itself for ``dt = 0``)."""
+        if float(dt) == 0.0:
+            return self
+        return SumTorque(*[term.shifted(dt) for term in self.terms])
 
     def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
         total = None
@@ -307,14 +452,19 @@ class FunctionTorque(TorqueModel):
     velocity_dependent : bool
         Declare ``False`` if the torque does not depend on ``omega_body`` (it lets a
         splitting integrator treat it as a conservative kick).
+    internal : bool
+        Declare ``True`` for a torque between parts of the body (normal to ``L``): the
+        integrators then keep the inertial angular momentum (:attr:`TorqueModel.internal`).
     """
 
-    def __init__(self, function: Callable, *, velocity_dependent: bool = True):
+    def __init__(self, function: Callable, *, velocity_dependent: bool = True,
+                 internal: bool = False):
         if not callable(function):
             raise TypeError(f"expected a callable torque(t, quaternion, omega_body, body), "
                             f"got {type(function).__name__}")
         self.function = function
         self.velocity_dependent = bool(velocity_dependent)
+        self.internal = bool(internal)
 
     def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
         return np.asarray(self.function(t, quaternion, omega_body, body), dtype=float)
@@ -323,9 +473,37 @@ class FunctionTorque(TorqueModel):
         return f"FunctionTorque({getattr(self.function, '__name__', repr(self.function))})"
 
 
-def as_torque_model(obj, *, velocity_dependent: bool = True) -> TorqueModel:
+class _ShiftedTorque(TorqueModel):
+    """A model evaluated at ``t + dt`` (the default of :meth:`TorqueModel.shifted`)."""
+
+    def __init__(self, inner: TorqueModel, dt: float):
+        self.inner, self.dt = inner, float(dt)
+        self.velocity_dependent = inner.velocity_dependent
+        self.internal = inner.internal
+
+    def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
+        return self.inner(np.asarray(t, dtype=float) + self.dt, quaternion, omega_body, body)
+
+    def characteristic_rate(self, t, quaternion, omega_body, body):
+        return self.inner.characteristic_rate(np.asarray(t, dtype=float) + self.dt,
+                                              quaternion, omega_body, body)
+
+    def shifted(self, dt: float) -> TorqueModel:
+        dt = float(dt)
+        return self if dt == 0.0 else _ShiftedTorque(self.inner, self.dt + dt)
+
+    def __repr__(self) -> str:
+        return f"{self.inner!r} at t + {self.dt:.9g} s"
+
+
+def as_torque_model(obj, *, velocity_dependent: bool | None = None,
+                    internal: bool | None = None) -> TorqueModel:
     """Return ``obj`` if it is a :class:`TorqueModel`, else wrap a callable in a
-    :class:`FunctionTorque` (so that ``+`` works on it).
+    :class:`FunctionTorque` (so that ``+`` works on it, and the integrators can ask it
+    for its time scale and shift its time origin).
+
+    ``velocity_dependent`` and ``internal`` default to the callable's attributes of
+    those names if it has them, else ``True`` and ``False``.
 
     Raises
     ------
@@ -344,7 +522,11 @@ def as_torque_model(obj, *, velocity_dependent: bool = True) -> TorqueModel:
     """
     if isinstance(obj, TorqueModel):
         return obj
-    return FunctionTorque(obj, velocity_dependent=velocity_dependent)
+    if velocity_dependent is None:
+        velocity_dependent = getattr(obj, "velocity_dependent", True) is not False
+    if internal is None:
+        internal = getattr(obj, "internal", False) is True
+    return FunctionTorque(obj, velocity_dependent=velocity_dependent, internal=internal)
 
 
 # --- gravity gradient ------------------------------------------------------------------
@@ -428,6 +610,23 @@ class GravityGradient(TorqueModel):
         Ir = _matvec(_inertia_of(body), r_b)
         return 3.0 * self.mu / (r2 * r2 * np.sqrt(r2)) * _cross(r_b, Ir)
 
+    def characteristic_rate(self, t, quaternion, omega_body, body) -> float:
+        """``max(sqrt(3 mu / r_p^3), orbital rate at periapsis)``, rad/s: the libration
+        rate of a body with ``(C - A)/B = 1`` (``r_p`` the periapsis distance, or
+        ``|r(0)|``), or the rate at which the direction to the primary turns."""
+        r = _min_radius(self.orbit)
+        return max(math.sqrt(3.0 * self.mu / r**3), _orbit_rate(self.orbit))
+
+    def shifted(self, dt: float) -> TorqueModel:
+        """On a Keplerian orbit: the same model with the mean anomaly advanced by
+        ``n dt``; other paths: the default wrapper."""
+        dt = float(dt)
+        if dt == 0.0:
+            return self
+        if isinstance(self.orbit, KeplerOrbit):
+            return GravityGradient(self.mu, _advance(self.orbit, dt))
+        return super().shifted(dt)
+
     def potential(self, t, quaternion, body) -> np.ndarray:
         """Gravity-gradient potential energy ``V = mu/(2 r^3)(3 r_hat.I r_hat - tr I)``, J.
 
@@ -480,6 +679,10 @@ class ConstantTorque(TorqueModel):
             return self.torque.copy()
         return quat.rotate(quaternion, self.torque, inverse=True)
 
+    def shifted(self, dt: float) -> ConstantTorque:
+        """Itself (no time dependence)."""
+        return self
+
     def __repr__(self) -> str:
         return f"ConstantTorque({self.torque.tolist()} N m, frame={self.frame!r})"
 
@@ -488,46 +691,74 @@ class ConstantTorque(TorqueModel):
 
 
 class EnergyDissipation(TorqueModel):
-    """Internal energy dissipation (nutation damper, fuel slosh, flexible antennas):
-    the energy-sink model that turned Explorer 1 from a long-axis into a flat spinner.
+    r"""Internal energy dissipation with the inertial angular momentum fixed: the
+    quasi-rigid relaxation of a tumbling asteroid, or of a spacecraft with a nutation
+    damper, fuel slosh or flexible antennas (Explorer 1).
 
-    The internal torque is the minimum-norm torque that keeps ``|L|`` and removes
-    kinetic energy, the component of ``ω`` perpendicular to ``L = I ω``:
-
-    .. math::
-
-        M = -k\\,\\omega_\\perp = -k\\left(\\omega - \\frac{(\\omega\\cdot L)}{L^2} L
-            \\right) = \\frac{k}{L^2}\\, L \\times (L \\times \\omega)
-
-    so that (Euler, body frame, ``dL/dt = L x ω + M``)
-
-    .. math::
-
-        \\frac{d}{dt}\\tfrac12 L^2 = L\\cdot M = 0, \\qquad
-        \\frac{dE}{dt} = \\omega\\cdot M = -k\\,|\\omega_\\perp|^2 \\le 0 ,
-
-    with equality only for a pure principal-axis spin.  This is the "double bracket"
-    dissipation of Bloch et al. (1996), which keeps the Casimir ``|L|`` exactly and
-    drives the energy down to its minimum ``L^2 / (2 C)`` (spin about the major axis:
-    the major-axis rule of the energy-sink analysis, Hughes 1986, Ch. 5).
-
-    The coefficient is set from ``time_constant`` ``tau`` so that near the final state
-    the excess energy ``E - L^2/(2C)`` decays as ``exp(-t / tau)``.  Linearising about
-    spin about ``C`` gives ``dE/dt = -k ((C-A)^2 ω1^2 + (C-B)^2 ω2^2) / C^2`` while the
-    free nutation shares the excess energy equally between the two transverse terms, so
-    on average
+    A body that dissipates energy inside itself keeps its total angular momentum: in
+    inertial space ``L`` does not move, while in the body frame it drifts toward the
+    axis of the largest moment, where the kinetic energy ``E = L.I^-1 L / 2`` is least
+    for the given ``|L|`` (the quasi-rigid picture of Sharma, Burns & Hui 2005 and
+    Breiter, Rozek & Vokrouhlicky 2012: the body is rigid to first order, the small
+    anelastic strains only drain energy).  With ``omega = I^-1 L`` the rigid-body rate,
+    the body-frame angular momentum obeys
 
     .. math::
 
-        \\frac{1}{\\tau} = \\frac{k}{C}\\left(\\frac{C-A}{A} + \\frac{C-B}{B}\\right),
-        \\qquad k = \\frac{C}{\\tau\\,[(C-A)/A + (C-B)/B]} .
+        \frac{dL}{dt} = L\times\omega + M, \qquad
+        M = \frac{k}{L^2}\, L\times(L\times\omega) = -k\,\omega_\perp ,
 
-    For a prolate body (``B = C``) the final spin axis is anywhere in the B-C plane and
-    only the ``ω1`` term is excited; there ``k = A C / (2 tau (C - A))`` gives the same
-    e-folding exactly.  (For a nearly prolate triaxial body the nutation period near the
-    final state, ``2 pi / (ω sqrt((C-A)(C-B)/(AB)))``, becomes long and the averaged rate
+    ``omega_perp = omega - (omega.L) L / L^2`` the part of ``omega`` normal to ``L``.
+    ``M`` is the internal torque this class returns: ``L.M = 0`` (``|L|`` kept) and
+
+    .. math::
+
+        \frac{dE}{dt} = \omega\cdot M = -k\,|\omega_\perp|^2 \le 0 ,
+
+    zero only for a principal-axis spin; among the torques that keep ``|L|`` it is the
+    one that removes energy fastest for its size (the "double bracket" dissipation of
+    Bloch et al. 1996).  Stable end state: spin about the major axis, ``E = L^2/2C``.
+
+    **The attitude.**  ``L_inertial = R L`` is fixed, so the body frame cannot turn at
+    ``omega`` alone: with ``dR/dt = R [Omega x]``, ``d(R L)/dt = R (Omega x L + L x
+    omega + M) = 0`` holds for
+
+    .. math::
+
+        \Omega = \omega + \frac{M\times L}{L^2}
+
+    (``(M x L) x L = -L^2 M`` since ``L.M = 0``).  The extra rate is normal to ``L``; a
+    rate along ``L`` would only re-label the rotation phase about ``L``, which the free
+    motion carries, and is taken zero.  The model is therefore *internal*
+    (:attr:`TorqueModel.internal`): the integrators apply ``M`` to ``L`` in the body
+    frame and ``Omega`` to the attitude, the splitting integrator in a kick that ends
+    by re-imposing the inertial ``L`` exactly (:mod:`attitude.propagation.splitting`),
+    the DOP853 reference in its right-hand side.  The body-frame motion of ``L`` (and
+    so ``E``, the regime, the nutation angles) is the same as with an external torque
+    ``M``; only the attitude differs: an external ``M`` would turn the inertial ``L``
+    (by per cents over a long-axis to flat-spin relaxation), a drift of the pole that no
+    internal mechanism can cause.
+
+    **The time constant.**  ``k`` is set from ``time_constant`` ``tau`` so that near
+    the final state the excess energy ``E - L^2/(2C)`` decays as ``exp(-t / tau)`` (and
+    the nutation angle between ``L`` and the major axis, ``~ sqrt(E - L^2/2C)``, as
+    ``exp(-t / 2 tau)``).  Near spin about ``C``, ``omega_perp ~= ((C-A) w1, (C-B) w2,
+    0) / C``, so ``dE/dt = -k ((C-A)^2 w1^2 + (C-B)^2 w2^2) / C^2``, while the free
+    nutation keeps ``A (C-A) w1^2 + B (C-B) w2^2 = 2 C (E - L^2/2C)`` and shares it
+    equally between the two terms on average; hence
+
+    .. math::
+
+        \frac{1}{\tau} = \frac{k}{C}\left(\frac{C-A}{A} + \frac{C-B}{B}\right),
+        \qquad k = \frac{C}{\tau\,[(C-A)/A + (C-B)/B]} .
+
+    For a prolate body (``B = C``) only the ``w1`` term is excited and
+    ``k = A C / (2 tau (C - A))`` gives the same e-folding exactly.  (For a nearly
+    prolate triaxial body the nutation period near the final state,
+    ``2 pi / (omega sqrt((C-A)(C-B)/(AB)))``, becomes long and the averaged rate
     applies only once it is short compared with ``tau``.)  A spherical body has
-    ``ω_perp = 0``: no torque.
+    ``omega_perp = 0``: no torque.  For an asteroid, ``tau`` follows from its size,
+    density, spin and ``mu Q`` (:func:`damping_timescale`).
 
     Parameters
     ----------
@@ -536,26 +767,24 @@ class EnergyDissipation(TorqueModel):
 
     Notes
     -----
-    **What is conserved.**  A mechanism inside the body conserves the *total* angular
-    momentum of body plus moving parts.  With only the rigid body's ``(q, ω)`` as state
-    (``L = I ω``), a torque that changes ``E`` must be non-zero and so rotates the
-    inertial vector ``L`` (``dL_inertial/dt = R M``); keeping ``L_inertial`` fixed
-    exactly while ``E`` decays would need the relative momentum of the moving parts as
-    an extra state.  This model keeps ``|L|`` exactly (``L . M = 0`` identically: to
-    round-off of the integrator) and, being the smallest torque that removes energy at
-    the given rate, disturbs the direction of ``L`` the least; that disturbance is
-    perpendicular to ``L`` and follows ``ω_perp``, which circles ``L`` at the nutation
-    frequency in inertial space, so it averages out to second order (the direction of
-    ``L`` wobbles by about ``k |ω_perp| / (|L| ω_nutation)`` and drifts slowly).
+    The rate of a real body depends on its rheology and on the nutation angle (the
+    dissipation happens at the nutation frequency and its harmonics; Efroimsky &
+    Lazarian 2000, Breiter et al. 2012, Frouard & Efroimsky 2018); this model fixes the
+    e-folding time near the end state and keeps the qualitative path (LAM ->
+    separatrix -> SAM -> principal-axis spin).
 
     References
     ----------
-    .. [1] Bloch, A. M., Krishnaprasad, P. S., Marsden, J. E. & Ratiu, T. S. (1996).
+    .. [1] Sharma, I., Burns, J. A. & Hui, C.-Y. (2005). Nutational damping times in
+       solids of revolution. *MNRAS* 359, 79-92.
+    .. [2] Breiter, S., Rozek, A. & Vokrouhlicky, D. (2012). Stress field and spin axis
+       relaxation for inelastic triaxial ellipsoids. *MNRAS* 427, 755.
+    .. [3] Bloch, A. M., Krishnaprasad, P. S., Marsden, J. E. & Ratiu, T. S. (1996).
        The Euler-Poincare equations and double bracket dissipation. *Commun. Math.
-       Phys.* 175, 1-42 (Eq. ``dM/dt = M x Ω + α M x (M x Ω)``).
-    .. [2] Hughes, P. C. (1986). *Spacecraft Attitude Dynamics*. Wiley. Ch. 5 (energy
+       Phys.* 175, 1-42.
+    .. [4] Hughes, P. C. (1986). *Spacecraft Attitude Dynamics*. Wiley. Ch. 5 (energy
        sink, major-axis rule).
-    .. [3] Bracewell, R. N. & Garriott, O. K. (1958). Rotation of artificial Earth
+    .. [5] Bracewell, R. N. & Garriott, O. K. (1958). Rotation of artificial Earth
        satellites. *Nature* 182, 760-762 (Explorer 1).
 
     Examples
@@ -565,6 +794,8 @@ class EnergyDissipation(TorqueModel):
     >>> from attitude.torques import EnergyDissipation
     >>> body = RigidBody.from_principal_moments([1.0, 1.5, 2.0])
     >>> damper = EnergyDissipation("10 min")
+    >>> damper.internal
+    True
     >>> w = np.array([0.3, 0.1, 0.2])
     >>> M = damper(0.0, [0, 0, 0, 1], w, body)
     >>> L = body.inertia @ w
@@ -573,13 +804,23 @@ class EnergyDissipation(TorqueModel):
     """
 
     velocity_dependent = True
+    internal = True
 
     def __init__(self, time_constant):
         self.time_constant = _positive(time_constant, "s", "time_constant")
         self._cache = None
 
     def coefficient(self, body) -> np.ndarray | float:
-        """Damping coefficient ``k`` (kg m^2/s) for ``body`` (see the class notes)."""
+        """Damping coefficient ``k`` (kg m^2/s) for ``body`` (see the class notes).
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import EnergyDissipation
+        >>> body = RigidBody.from_principal_moments([2.0, 4.0, 4.0])   # prolate
+        >>> EnergyDissipation(10.0).coefficient(body)     # A C / (2 tau (C - A))
+        0.2
+        """
         cached = self._cache
         if cached is not None and cached[0] is body:   # bodies are immutable values
             return cached[1]
@@ -617,8 +858,125 @@ class EnergyDissipation(TorqueModel):
         w_perp = w_perp - _dot(w_perp, L)[..., None] / safe * L
         return -k * w_perp
 
+    def characteristic_rate(self, t, quaternion, omega_body, body) -> float:
+        """``1 / time_constant``, rad/s."""
+        return 1.0 / self.time_constant
+
+    def shifted(self, dt: float) -> EnergyDissipation:
+        """Itself (no time dependence)."""
+        return self
+
     def __repr__(self) -> str:
         return f"EnergyDissipation(time_constant={self.time_constant:.6g} s)"
+
+
+def internal_rate(torque, omega_body, body) -> np.ndarray:
+    r"""Extra body-frame rate of the attitude under an internal torque, rad/s.
+
+    ``(M x L) / L^2`` with ``L = I omega``: added to ``omega`` in the attitude
+    kinematics it keeps the inertial ``L`` fixed while ``M`` turns ``L`` in the body
+    frame (:class:`EnergyDissipation`).  Zero where ``L = 0``.
+
+    Parameters
+    ----------
+    torque : (..., 3) array
+        Internal torque (normal to ``L``), body frame, N m.
+    omega_body : (..., 3) array
+        rad/s.
+    body : RigidBody, sequence of them, or inertia array (..., 3, 3)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import EnergyDissipation, internal_rate
+    >>> body = RigidBody.from_principal_moments([1.0, 1.5, 2.0])
+    >>> w = np.array([0.3, 0.1, 0.2])
+    >>> M = EnergyDissipation(60.0)(0.0, [0, 0, 0, 1], w, body)
+    >>> L = body.inertia @ w
+    >>> bool(np.allclose(np.cross(internal_rate(M, w, body), L), -M, atol=1e-17))
+    True
+    """
+    M = np.asarray(torque, dtype=float)
+    L = _matvec(_inertia_of(body), np.asarray(omega_body, dtype=float))
+    L2 = _dot(L, L)
+    safe = np.where(L2 > 0, L2, 1.0)
+    out = _cross(M, L) / np.asarray(safe)[..., None]
+    return np.where(np.asarray(L2)[..., None] > 0, out, 0.0)
+
+
+def damping_timescale(diameter, density, *, period=None, spin_rate=None,
+                      rigidity_q="5e11 Pa", k3_squared: float = 0.1) -> u.Quantity:
+    r"""Damping time scale of a tumbling asteroid (Burns & Safronov 1973; Harris 1994).
+
+    .. math::
+
+        \tau \simeq \frac{\mu Q}{\rho\, K_3^2\, R^2\, \omega^3}
+
+    with ``mu`` the rigidity, ``Q`` the quality factor (they enter only as the product
+    ``mu Q``), ``rho`` the bulk density, ``R = D/2`` the mean radius, ``omega`` the spin
+    rate and ``K_3^2`` a shape factor (about 0.1 for a nearly spherical body, smaller
+    for elongated ones).  An order-of-magnitude estimate: published coefficients of
+    this form differ by factors of ~10 between authors (Sharma, Burns & Hui 2005 derive
+    ``T_d = D(h) mu Q / (rho a^2 Omega^3)`` with ``D(h)`` a few hundred, shape
+    dependent).  Use it as the ``time_constant`` of :class:`EnergyDissipation` (order
+    of magnitude; docs/torques.md has a worked Apophis example).
+
+    Parameters
+    ----------
+    diameter : float (m), Quantity or str
+        Mean (volume-equivalent) diameter.
+    density : float (kg/m^3), Quantity or str
+    period : float (s), Quantity or str, optional
+        Spin period (give this or ``spin_rate``).
+    spin_rate : float (rad/s), Quantity or str, optional
+    rigidity_q : float (Pa), Quantity or str
+        ``mu Q``; default 5e11 Pa (Harris 1994's value for rock-like asteroids, as used
+        by Pravec et al. 2005, 2014).
+    k3_squared : float
+        Shape factor ``K_3^2`` (default 0.1).
+
+    Returns
+    -------
+    Quantity
+        The time scale, in years.
+
+    Raises
+    ------
+    TorqueConfigError
+        A non-positive or non-finite input, a unit of the wrong dimension, or both (or
+        neither) of ``period`` and ``spin_rate``.
+
+    References
+    ----------
+    .. [1] Burns, J. A. & Safronov, V. S. (1973). Asteroid nutation angles. *MNRAS* 165,
+       403-411.
+    .. [2] Harris, A. W. (1994). Tumbling asteroids. *Icarus* 107, 209-211.
+    .. [3] Pravec, P. et al. (2005). Tumbling asteroids. *Icarus* 173, 108-131.
+    .. [4] Pravec, P. et al. (2014). The tumbling spin state of (99942) Apophis.
+       *Icarus* 233, 48-60.
+    .. [5] Sharma, I., Burns, J. A. & Hui, C.-Y. (2005). *MNRAS* 359, 79-92.
+
+    Examples
+    --------
+    Apophis (D = 0.34 km, 2.5 g/cm^3, P = 30.56 h, mu Q = 5e11 Pa):
+
+    >>> from attitude.torques import damping_timescale
+    >>> tau = damping_timescale("0.34 km", "2.5 g/cm3", period="30.56 h")
+    >>> print(f"{tau.to_value('Gyr'):.1f} Gyr")
+    11.8 Gyr
+    """
+    D = _positive(diameter, "m", "diameter")
+    rho = _positive(density, "kg/m3", "density")
+    muq = _positive(rigidity_q, "Pa", "rigidity_q")
+    k3 = _positive(k3_squared, "", "k3_squared")
+    if (period is None) == (spin_rate is None):
+        raise TorqueConfigError("give exactly one of 'period' and 'spin_rate'", key="period")
+    omega = (2.0 * math.pi / _positive(period, "s", "period") if spin_rate is None
+             else _positive(spin_rate, "rad/s", "spin_rate"))
+    R = 0.5 * D
+    tau = muq / (rho * k3 * R * R * omega**3)
+    return (tau * u.s).to(u.yr)
 
 
 # --- magnetic fields and eddy currents --------------------------------------------------
@@ -799,6 +1157,37 @@ class EddyCurrentDamping(TorqueModel):
         sigma = _positive(conductivity, "S/m", "conductivity")
         return cls(2.0 * np.pi / 15.0 * sigma * R**5, field)
 
+    def characteristic_rate(self, t, quaternion, omega_body, body):
+        """``lambda_max(bold M) |B(t)|^2 / A``, rad/s: the fastest damping rate of the
+        spin (``A`` the least moment), or the orbital rate of a field along an orbit if
+        larger."""
+        tensor = np.atleast_2d(self.magnetic_tensor)
+        strength = (float(abs(self.magnetic_tensor)) if self.isotropic
+                    else float(np.max(np.abs(np.linalg.eigvalsh(tensor)))))
+        field = np.asarray(self.field(np.asarray(t, dtype=float)), dtype=float)
+        rate = strength * _dot(field, field) / _moments_of(body)[..., 0]
+        orbit = getattr(self.field, "orbit", None)
+        if orbit is not None:
+            rate = np.maximum(rate, _orbit_rate(orbit))
+        return float(rate) if np.ndim(rate) == 0 else rate
+
+    def shifted(self, dt: float) -> TorqueModel:
+        """Itself in a uniform field; in a tilted dipole on a Keplerian orbit, the same
+        model with the orbit and the Earth rotation angle advanced by ``dt``; else the
+        default wrapper."""
+        dt = float(dt)
+        if dt == 0.0 or isinstance(self.field, UniformField):
+            return self
+        f = self.field
+        if isinstance(f, TiltedDipoleField) and isinstance(f.orbit, KeplerOrbit):
+            field = TiltedDipoleField(_advance(f.orbit, dt), moment=f.moment, tilt=f.tilt,
+                                      pole_longitude=f.pole_longitude,
+                                      rotation_angle=f.rotation_angle
+                                      + f.rotation_rate * dt,
+                                      rotation_rate=f.rotation_rate)
+            return EddyCurrentDamping(self.magnetic_tensor, field)
+        return super().shifted(dt)
+
     def evaluate(self, t, quaternion, omega_body, body):
         B = quat.rotate(quaternion, np.asarray(self.field(t), dtype=float), inverse=True)
         x = _cross(omega_body, B)
@@ -871,6 +1260,40 @@ class HeavyTopPivot(TorqueModel):
                                     "mass, or build the body with one", key="mass")
         up_b = quat.rotate(quaternion, self.up, inverse=True)
         return np.asarray(mass)[..., None] * self.g * _cross(up_b, self.pivot_to_com)
+
+    def characteristic_rate(self, t, quaternion, omega_body, body):
+        """``sqrt(m g |l| / I_swing)``, rad/s: the small-swing pendulum frequency
+        (``I_swing`` the least moment about an axis normal to ``l``: the torque is always
+        normal to ``l``), the time scale of a slow top; a fast top precesses more slowly,
+        at about ``m g l / |L|``, and the splitting step adds how fast the torque changes
+        along its nutation.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import HeavyTopPivot
+        >>> top = RigidBody(np.diag([9.5e-4, 9.5e-4, 2.0e-4]), mass=0.5)
+        >>> pivot = HeavyTopPivot(pivot_to_com=[0.0, 0.0, 0.04])
+        >>> round(pivot.characteristic_rate(0.0, [0, 0, 0, 1], [0, 0, 0.0], top), 3)
+        14.369
+        """
+        mass = self.mass if self.mass is not None else _mass_of(body)
+        if mass is None:
+            raise TorqueConfigError("the body has no mass: give HeavyTopPivot a "
+                                    "mass, or build the body with one", key="mass")
+        length = float(np.linalg.norm(self.pivot_to_com))
+        mgl = np.asarray(mass, dtype=float) * self.g * length
+        inertia = _inertia_of(body)
+        axis = self.pivot_to_com / length
+        normal = np.eye(3) - np.outer(axis, axis)            # directions of the torque
+        A = 1.0 / np.linalg.norm(np.linalg.inv(inertia) @ normal, ord=2, axis=(-2, -1))
+        rate = np.sqrt(mgl / A)
+        return float(rate) if np.ndim(rate) == 0 else rate
+
+    def shifted(self, dt: float) -> HeavyTopPivot:
+        """Itself (no time dependence)."""
+        return self
 
     def __repr__(self) -> str:
         mass = "body.mass" if self.mass is None else f"{self.mass:.6g} kg"

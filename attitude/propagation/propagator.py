@@ -111,8 +111,10 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         Relative tolerance of the ``"integrator"`` method (default 1e-13).
     step : float (s) or time Quantity, optional
         Longest step of the ``"splitting"`` method; default
-        :func:`attitude.propagation.splitting.choose_step` (a fixed fraction of the fastest time
-        scale: spin, libration, orbit, damping).  Output times are always hit exactly.
+        :func:`attitude.propagation.splitting.choose_step` (a fixed fraction of the
+        torques' time scales: libration, orbit, damping, and how fast each torque changes
+        along the free motion; not the spin, which the exact free flow carries).  Output
+        times are always hit exactly.
     order : {2, 4, 6}, optional
         Order of the ``"splitting"`` method (default 4).
     progress : bool

@@ -12,7 +12,10 @@ components.  It is the trusted baseline that faster methods are checked against.
 
 A torque model is any callable ``torque(t, quaternion, omega_body, body)`` returning the
 body-frame torque in N m; ``t`` is seconds since the epoch, ``quaternion`` the
-body -> inertial quaternion (scalar-last).
+body -> inertial quaternion (scalar-last).  A model with ``internal = True`` (a torque
+between parts of the body, :class:`attitude.torques.EnergyDissipation`) turns ``L`` in
+the body frame only: the attitude then turns at ``omega + (M x L)/L^2``, which keeps
+the inertial ``L`` fixed.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from scipy.integrate import solve_ivp
 from .. import quaternion as quat
 from ..body import RigidBody
 from ..errors import PropagationError
+from ..torques import internal_rate
 from .events import evaluate
 
 __all__ = ["integrate_reference", "integrate_reference_batch", "DEFAULT_RTOL",
@@ -42,15 +46,24 @@ Torque = Callable[[float, np.ndarray, np.ndarray, RigidBody], np.ndarray]
 def _rhs(body: RigidBody, torques: Sequence[Torque]):
     inertia = body.inertia
     inverse = np.linalg.inv(inertia)
+    external = [m for m in torques if getattr(m, "internal", False) is not True]
+    internal = [m for m in torques if getattr(m, "internal", False) is True]
 
     def rhs(t, y):
         q, w = y[:4], y[4:]
         h = inertia @ w
         dw = np.cross(h, w)
-        for torque in torques:
+        for torque in external:
             dw = dw + np.asarray(torque(t, q, w, body), dtype=float)
+        rate = w
+        if internal:
+            # torques between parts of the body turn L in the body frame only: the frame
+            # turns at w + (M x L)/L^2 so that the inertial L stays fixed
+            m = sum(np.asarray(torque(t, q, w, body), dtype=float) for torque in internal)
+            dw = dw + m
+            rate = w + internal_rate(m, w, inertia)
         dw = inverse @ dw
-        dq = 0.5 * quat.multiply(q, np.append(w, 0.0))
+        dq = 0.5 * quat.multiply(q, np.append(rate, 0.0))
         return np.concatenate([dq, dw])
 
     return rhs

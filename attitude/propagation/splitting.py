@@ -16,8 +16,11 @@ the attitude only (gravity gradient, constant, heavy-top pivot:
 ``velocity_dependent = False``) the kick is exact, ``omega += h I^-1 M(t, q)``, and is
 the flow of the potential energy: every composition of these flows is a Lie–Poisson
 (symplectic) map, and a symmetric composition is time-reversible.  Velocity-dependent
-torques (dissipation, eddy currents) are integrated inside the kick by a Runge–Kutta
-step with the attitude frozen (explicit midpoint for order 2, classical RK4 otherwise).
+torques (eddy currents) are integrated inside the kick by a Runge–Kutta step with the
+attitude frozen (explicit midpoint for order 2, classical RK4 otherwise).  Internal
+torques (``internal = True``: dissipation) turn ``L`` in the body frame only: their kick
+also turns the attitude, at ``(M x L)/L^2``, and ends by restoring the inertial ``L``, so
+that it does not drift (``_System.internal_kick``).
 
 Compositions (``order=`` / ``scheme=``; ``K(b h) F(a h) K(...) ...``):
 
@@ -37,7 +40,9 @@ as for ``p^2/2 + V(q)``; ~10x smaller error than S6 at the same cost), else
 ``"blanes-moan"``.  With velocity-dependent torques the order is ``min(order, 4)`` (the
 RK sub-step is of order 2 for Strang, 4 otherwise; the limit shows only when the damping
 is fast on the step).  With no torque at all every scheme is the exact solution to
-round-off.  The default step is :func:`choose_step`.  ``docs/integrators.md`` has the
+round-off.  The default step is :func:`choose_step`: set by the torques' own time scales
+(:meth:`attitude.torques.TorqueModel.characteristic_rate`) and by how fast each torque
+changes along the free motion, not by the spin.  ``docs/integrators.md`` has the
 formulas, the measured orders, accuracy and timings, and which method to use when.
 
 Time is carried in the extended phase space: the free flow advances ``t``, the kick is
@@ -77,8 +82,7 @@ from ..body import RigidBody, as_bodies, to_body_frame, to_principal_frame
 from ..deprecation import moved_attribute
 from ..errors import InvalidStateError
 from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
-from ..orbit import KeplerOrbit
-from ..torques import EddyCurrentDamping, EnergyDissipation, GravityGradient
+from ..torques import as_torque_model
 
 __all__ = [
     "integrate_splitting",
@@ -514,6 +518,12 @@ def _is_conservative(model) -> bool:
     return getattr(model, "velocity_dependent", True) is False
 
 
+def _is_internal(model) -> bool:
+    """A torque between parts of the body (``internal = True``): it keeps the inertial
+    angular momentum (:attr:`attitude.torques.TorqueModel.internal`)."""
+    return getattr(model, "internal", False) is True
+
+
 class _System:
     """Everything the stepping loop needs about the bodies and torques."""
 
@@ -523,8 +533,11 @@ class _System:
         batch, _ = as_bodies(bodies)
         self.body_arg = bodies[0] if self.n == 1 else batch
         terms = _terms(torques)
-        self.kick_terms = [m for m in terms if _is_conservative(m)]
-        self.drag_terms = [m for m in terms if not _is_conservative(m)]
+        self.terms = terms
+        self.internal_terms = [m for m in terms if _is_internal(m)]
+        self.kick_terms = [m for m in terms if _is_conservative(m) and not _is_internal(m)]
+        self.drag_terms = [m for m in terms
+                           if not _is_conservative(m) and not _is_internal(m)]
         self.moments = batch.principal_moments
         self.inv_moments = 1.0 / self.moments
         self.q_bp = batch.body_to_principal
@@ -573,6 +586,74 @@ class _System:
     def accel_drag(self, t, q_p, w_p):
         return self._torque(self.drag_terms, t, q_p, w_p)
 
+    def internal_kick(self, t, q, w, tau, rk_order, anchor=None):
+        """The kick with internal torques, over ``tau`` at the frozen time ``t``.
+
+        The vector field is ``dL/dt = M_ext(q, w) + M_int(w)`` in the principal frame with
+        the attitude moving at the extra rate ``(M_int x L)/L^2`` only (the rigid rotation
+        at ``w`` is the free flow's).  Explicit midpoint (``rk_order = 2``) or RK4 on
+        ``(w, p, L_ext)``, ``p`` the attitude increment (``q(s) = q p(s)``) and
+        ``L_ext`` the inertial angular momentum given by the external torques alone;
+        then the new body-frame ``L`` is set to ``q'^-1 (L_inertial(0) + L_ext)``: with
+        internal torques only, ``anchor`` is the inertial ``L`` of the start of the run,
+        restored to round-off at every kick (no drift accumulates); with external
+        torques too, ``L`` changes only by theirs.
+        """
+        moments = self.moments
+        external = self.kick_terms + self.drag_terms
+        one = np.zeros_like(q)
+        one[:, 3] = 1.0
+
+        def field(wv, p):
+            qs = quat.multiply(q, p)
+            qs = qs / np.sqrt(np.sum(qs * qs, axis=1, keepdims=True))
+            L = wv * moments
+            a_int = self._torque(self.internal_terms, t, qs, wv)
+            m_int = a_int * moments
+            L2 = np.sum(L * L, axis=1, keepdims=True)
+            extra = np.where(L2 > 0, _cross(m_int, L) / np.where(L2 > 0, L2, 1.0), 0.0)
+            dp = 0.5 * quat.multiply(p, np.concatenate([extra, np.zeros((len(p), 1))], axis=1))
+            if external:
+                a_ext = self._torque(external, t, qs, wv)
+                return a_int + a_ext, dp, quat.rotate(qs, a_ext * moments)
+            return a_int, dp, None
+
+        def step(y, k, c):
+            wv, p, le = y
+            return (wv + c * k[0], p + c * k[1], None if k[2] is None else le + c * k[2])
+
+        y0 = (w, one, np.zeros_like(w))
+        k1 = field(w, one)
+        if rk_order == 2:
+            k2 = field(*step(y0, k1, 0.5 * tau)[:2])
+            w1, p1, le1 = step(y0, k2, tau)
+        else:
+            y = step(y0, k1, 0.5 * tau)
+            k2 = field(y[0], y[1])
+            y = step(y0, k2, 0.5 * tau)
+            k3 = field(y[0], y[1])
+            y = step(y0, k3, tau)
+            k4 = field(y[0], y[1])
+            incr = tuple(None if k1[i] is None else
+                         k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i] for i in range(3))
+            w1, p1, le1 = step(y0, incr, tau / 6.0)
+        q1 = quat.multiply(q, p1)
+        q1 = q1 / np.sqrt(np.sum(q1 * q1, axis=1, keepdims=True))
+        if anchor is not None and le1 is None:
+            L_in = anchor
+        else:
+            L_in = quat.rotate(q, w * moments)
+            if le1 is not None:
+                L_in = L_in + le1
+        w1 = quat.rotate(quat.conjugate(q1), L_in) / moments
+        return q1, w1
+
+
+def _cross(a, b):
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
 
 # ===========================================================================
 # step size
@@ -582,88 +663,113 @@ class _System:
 STEPS_PER_PERIOD = {2: 1000, 4: 300, 6: 200}
 
 
-def _orbit_rate(path) -> float:
-    """Largest angular rate of the body's position about the primary, rad/s."""
-    if isinstance(path, KeplerOrbit):
-        e = path.e
-        return path.mean_motion * (1.0 + e) ** 2 / (1.0 - e * e) ** 1.5
-    velocity = getattr(path, "velocity", None)
-    if callable(velocity):
-        try:
-            r = np.asarray(path.position(0.0), dtype=float)
-            v = np.asarray(velocity(0.0), dtype=float)
-            return float(np.linalg.norm(np.cross(r, v)) / np.dot(r, r))
-        except Exception:  # noqa: BLE001 - a path without a usable velocity
-            return 0.0
-    return 0.0
+def _own_rates(model, system: _System, t0: float, q_p, w_p) -> np.ndarray:
+    """The model's own rate (``TorqueModel.characteristic_rate``), rad/s, per body."""
+    q_b, w_b = system.to_body(q_p, w_p)
+    model = as_torque_model(model)
+    if system.n == 1:
+        rate = model.characteristic_rate(t0, q_b[0], w_b[0], system.body_arg)
+    else:
+        rate = model.characteristic_rate(t0, q_b, w_b, system.body_arg)
+    return np.broadcast_to(np.asarray(rate, dtype=float), (system.n,))
 
 
-def _min_radius(path) -> float:
-    if isinstance(path, KeplerOrbit):
-        return path.periapsis
-    return float(np.linalg.norm(np.asarray(path.position(0.0), dtype=float)))
-
-
-def _model_rates(model, system: _System, q_p, w_p) -> np.ndarray:
-    """Rates (rad/s, per body) on which a torque model changes the motion."""
-    n = system.n
-    if isinstance(model, GravityGradient):
-        r = _min_radius(model.orbit)
-        return np.full(n, max(math.sqrt(3.0 * model.mu / r**3), _orbit_rate(model.orbit)))
-    if isinstance(model, EnergyDissipation):
-        return np.full(n, 1.0 / model.time_constant)
-    if isinstance(model, EddyCurrentDamping):
-        field = np.asarray(model.field(0.0), dtype=float)
-        tensor = np.atleast_2d(model.magnetic_tensor)
-        strength = float(np.max(np.abs(np.linalg.eigvalsh(tensor)))) if tensor.size > 1 \
-            else float(abs(model.magnetic_tensor))
-        rate = strength * float(field @ field) / system.moments[:, 0]
-        orbit = getattr(model.field, "orbit", None)
-        if orbit is not None:
-            rate = np.maximum(rate, _orbit_rate(orbit))
-        return rate
-    # anything else: sqrt of the angular acceleration it gives at t = 0
-    acc = system._torque([model], 0.0, q_p, w_p)
-    return np.sqrt(np.sqrt(np.sum(acc * acc, axis=1)))
-
-
-def _step_rates(system: _System, q_p, w_p) -> np.ndarray:
-    """``max(torque rate, spin^(2/3) torque^(1/3))`` per body (see :func:`choose_step`)."""
+def _variation_rates(model, system: _System, t0: float, q_p, w_p, order: int
+                     ) -> np.ndarray:
+    """How fast the model's torque, in inertial axes, varies along the exact free flow
+    (time frozen), rad/s, per body: ``max_j (|d^j M / ds^j| / |M|)^(1/j)`` for
+    ``j = 1, 2`` and, above order 2, 4, from central differences over the free flow at
+    spacing ``0.05 / |omega|``.  Differences at the level of their rounding count as
+    zero: a relative variation below ~1e-7 of the torque is not resolved, and need not
+    be (sampled at any step it moves the result by about that fraction of the torque's
+    effect)."""
     spin = np.sqrt(np.sum(w_p * w_p, axis=1))
-    torque = np.zeros(system.n)
-    for model in system.kick_terms + system.drag_terms:
-        torque = np.maximum(torque, _model_rates(model, system, q_p, w_p))
-    return np.maximum(torque, np.cbrt(spin * spin * torque))
+    moving = spin > 0
+    delta = np.where(moving, 0.05 / np.where(moving, spin, 1.0), 0.0)
+    torque = {}
+    for k in (-2, -1, 0, 1, 2):
+        if k == 0:
+            qk, wk = q_p, w_p
+        else:
+            qk, wk = _free_flow_vec(system.free, q_p, w_p, k * delta)
+        m = system._torque([model], t0, qk, wk) * system.moments
+        torque[k] = quat.rotate(qk, m)
+    scale = np.max([np.sqrt(np.sum(m * m, axis=1)) for m in torque.values()], axis=0)
+    ok = moving & (scale > 0)
+    d = np.where(ok, delta, 1.0)
+    sc = np.where(ok, scale, 1.0)
+
+    def rel(x, weight):
+        # above the rounding of the differences (|coefficients| * a generous 64 eps)
+        size = np.sqrt(np.sum(x * x, axis=1)) / sc
+        return np.maximum(size - 64.0 * np.finfo(float).eps * weight, 0.0)
+
+    nu = np.maximum(rel(torque[1] - torque[-1], 2.0) / (2.0 * d),
+                    np.sqrt(rel(torque[1] - 2.0 * torque[0] + torque[-1], 4.0)) / d)
+    if order > 2:
+        d4 = torque[2] - 4.0 * torque[1] + 6.0 * torque[0] - 4.0 * torque[-1] + torque[-2]
+        nu = np.maximum(nu, rel(d4, 16.0) ** 0.25 / d)
+    return np.where(ok, np.minimum(nu, spin), 0.0)
+
+
+def _step_rates(system: _System, q_p, w_p, order: int = 4, t0: float = 0.0
+                ) -> np.ndarray:
+    """``max over models of max(omega_M, (nu^2 omega_M)^(1/3))`` per body (see
+    :func:`choose_step`)."""
+    rate = np.zeros(system.n)
+    for model in system.terms:
+        own = _own_rates(model, system, t0, q_p, w_p)
+        nu = _variation_rates(model, system, t0, q_p, w_p, order)
+        rate = np.maximum(rate, np.maximum(own, np.cbrt(nu * nu * own)))
+    return rate
 
 
 def choose_step(bodies, quat0, omega0, torques=(), *, order: int = 4,
-                steps_per_period: float | None = None) -> float:
-    r"""The default step of :func:`integrate_splitting`, s.
+                steps_per_period: float | None = None, t0: float = 0.0) -> float:
+    r"""The default step of :func:`integrate_splitting`, s: set by the torques' own time
+    scales, not by the spin, which the exact free flow carries.
 
     ``h = 2 pi / (N * rate)``, ``N = STEPS_PER_PERIOD[order]`` (1000, 300, 200 for
-    orders 2, 4, 6), with, over the bodies of a batch,
+    orders 2, 4, 6), with, over the torque models and the bodies of a batch,
 
     .. math::
 
-        \mathrm{rate} = \max\big(\omega_M,\ (\Omega^2 \omega_M)^{1/3}\big)
+        \mathrm{rate} = \max\big(\omega_M,\ (\nu^2 \omega_M)^{1/3}\big)
 
-    where ``Omega = |omega0|`` is the spin rate and ``omega_M`` the fastest torque rate:
+    * ``omega_M`` is the model's own rate, :meth:`~attitude.torques.TorqueModel.characteristic_rate`
+      at ``(t0, quat0, omega0)`` (gravity gradient: ``sqrt(3 mu / r_p^3)`` or the
+      orbital rate at periapsis; dissipation: ``1 / time_constant``; eddy currents: the
+      damping rate; heavy top: the pendulum frequency; a user model: from its torque);
+    * ``nu`` is how fast the model's torque, seen in inertial axes, changes along the
+      exact free flow itself: measured by the integrator from central differences of
+      the torque over the free flow (``j = 1, 2, 4``-th derivatives,
+      ``max_j (|M^(j)| / |M|)^(1/j)``), at most the spin rate ``|omega0|``.
 
-    * gravity gradient: ``sqrt(3 mu / r_p^3)`` (the libration rate of a body with
-      ``(C - A)/B = 1``; ``r_p`` the periapsis distance, or ``|r(0)|``), or the orbital
-      angular rate at periapsis ``n (1 + e)^2 / (1 - e^2)^(3/2)`` if larger;
-    * energy dissipation: ``1 / time_constant``;
-    * eddy currents: ``lambda_max(M) |B(0)|^2 / A``, or the orbital rate of the field;
-    * any other model: ``sqrt(|I^-1 M|)`` at ``t = 0`` (the rate at which the torque
-      turns a body from rest).
+    A splitting with the exact free flow makes errors only through the commutators of
+    the kick with the free flow, which grow with the torque's rate of change *along* the
+    free motion, not with the spin: a spin about the axis of a symmetric top, or about
+    a principal axis under eddy currents in a uniform field, leaves the inertial torque
+    (nearly) unchanged, and the step is that of the torque alone.  For a triaxial
+    tumbler under gravity gradient (the inertial torque turns at up to twice the spin)
+    ``nu`` reaches the spin and the rule is the previous one, ``(Omega^2
+    omega_M)^(1/3)``, for which ``N`` was calibrated (~1e-10 relative accuracy over a
+    few orbits at order 4 and 6, ~1e-6 at order 2; docs/integrators.md has the
+    measurements).  Only the protocol of :class:`~attitude.torques.TorqueModel` is used
+    (``characteristic_rate`` and the call), so a user's model is treated like the
+    built-in ones.  Returns ``inf`` without torques (the free flow is exact in one
+    step).
 
-    The free flow is exact, so the spin enters only through how fast the body-frame
-    torque varies along it; the measured errors of the order-4 schemes grow like
-    ``(h Omega)^4`` with a constant that falls as ``omega_M / Omega`` falls, which the
-    geometric mean ``(Omega^2 omega_M)^(1/3)`` follows (docs/integrators.md).  ``N`` is
-    calibrated for ~1e-10 relative accuracy over a few orbits at order 4 and 6
-    (the torque-model tests hold conserved quantities to 1e-10 with it), ~1e-6 at
-    order 2.  Returns ``inf`` without torques (the free flow is exact in one step).
+    Examples
+    --------
+    >>> import math
+    >>> from attitude.propagation.splitting import choose_step, STEPS_PER_PERIOD
+    >>> from attitude.torques import EnergyDissipation
+    >>> h = choose_step([1.0, 2.0, 3.0], [0, 0, 0, 1], [0.0, 0.0, 5.0],  # pure spin about C
+    ...                 [EnergyDissipation(600.0)])
+    >>> bool(math.isclose(h, 2 * math.pi * 600.0 / STEPS_PER_PERIOD[4]))
+    True
+    >>> choose_step([1.0, 2.0, 3.0], [0, 0, 0, 1], [0.1, 0.2, 0.3])   # no torque
+    inf
     """
     body_list, _ = as_bodies(bodies)
     system = _System(body_list, torques)
@@ -671,12 +777,14 @@ def choose_step(bodies, quat0, omega0, torques=(), *, order: int = 4,
     w0 = np.atleast_2d(np.asarray(omega0, dtype=float))
     q_p, w_p = system.to_principal(np.broadcast_to(q0, (system.n, 4)).copy(),
                                    np.broadcast_to(w0, (system.n, 3)).copy())
-    return _choose_step(system, q_p, w_p, order, steps_per_period)
+    return _choose_step(system, q_p, w_p, order, steps_per_period, float(t0))
 
 
-def _choose_step(system, q_p, w_p, order, steps_per_period) -> float:
+def _choose_step(system, q_p, w_p, order, steps_per_period, t0: float = 0.0) -> float:
     per = STEPS_PER_PERIOD[order] if steps_per_period is None else float(steps_per_period)
-    rate = float(np.max(_step_rates(system, q_p, w_p)))
+    if not system.terms:
+        return math.inf
+    rate = float(np.max(_step_rates(system, q_p, w_p, order, t0)))
     if not rate > 0 or not math.isfinite(rate):
         return math.inf
     return 2.0 * math.pi / (per * rate)
@@ -745,6 +853,9 @@ class _Batch:
     def acc_drag(self, t, q, w):
         return self.s.accel_drag(t, q, w)
 
+    def internal(self, t, q, w, tau, rk_order, anchor):
+        return self.s.internal_kick(t, q, w, tau, rk_order, anchor)
+
     @staticmethod
     def axpy(w, tau, a):
         return w + tau * a
@@ -797,6 +908,55 @@ class _One:
 
     def acc_drag(self, t, q, w):
         return self._acc(self.s.drag_terms, t, q, w)
+
+    def internal(self, t, q, w, tau, rk_order, anchor):
+        """:meth:`_System.internal_kick` in plain floats (see there)."""
+        external = self.s.kick_terms + self.s.drag_terms
+        if external:                      # rare: the array version is good enough
+            q1, w1 = self.s.internal_kick(t, np.array([q]), np.array([w]), tau, rk_order,
+                                          anchor)
+            return tuple(q1[0].tolist()), tuple(w1[0].tolist())
+        I1, I2, I3 = (float(x) for x in self.s.moments[0])
+
+        def field(wv, p):
+            qs = _qmul1(q, p)
+            a = self._acc(self.s.internal_terms, t, qs, wv)
+            m0, m1, m2 = a[0] * I1, a[1] * I2, a[2] * I3
+            L0, L1, L2 = wv[0] * I1, wv[1] * I2, wv[2] * I3
+            LL = L0 * L0 + L1 * L1 + L2 * L2
+            if LL > 0:
+                ex = (m1 * L2 - m2 * L1) / LL
+                ey = (m2 * L0 - m0 * L2) / LL
+                ez = (m0 * L1 - m1 * L0) / LL
+            else:
+                ex = ey = ez = 0.0
+            px, py, pz, pw = p                         # dp = p (extra, 0) / 2
+            dp = (0.5 * (pw * ex + py * ez - pz * ey), 0.5 * (pw * ey - px * ez + pz * ex),
+                  0.5 * (pw * ez + px * ey - py * ex), -0.5 * (px * ex + py * ey + pz * ez))
+            return a, dp
+
+        def ax(y, c, k):
+            return tuple(yi + c * ki for yi, ki in zip(y, k))
+
+        one = (0.0, 0.0, 0.0, 1.0)
+        k1 = field(w, one)
+        if rk_order == 2:
+            k2 = field(ax(w, 0.5 * tau, k1[0]), ax(one, 0.5 * tau, k1[1]))
+            w1, p1 = ax(w, tau, k2[0]), ax(one, tau, k2[1])
+        else:
+            k2 = field(ax(w, 0.5 * tau, k1[0]), ax(one, 0.5 * tau, k1[1]))
+            k3 = field(ax(w, 0.5 * tau, k2[0]), ax(one, 0.5 * tau, k2[1]))
+            k4 = field(ax(w, tau, k3[0]), ax(one, tau, k3[1]))
+            p1 = tuple(o + tau / 6.0 * (a + 2.0 * b + 2.0 * c + d)
+                       for o, a, b, c, d in zip(one, k1[1], k2[1], k3[1], k4[1]))
+            w1 = tuple(o + tau / 6.0 * (a + 2.0 * b + 2.0 * c + d)
+                       for o, a, b, c, d in zip(w, k1[0], k2[0], k3[0], k4[0]))
+        q1 = _qmul1(q, p1)                                   # normalised
+        del w1                                   # superseded by the restored L
+        L_in = (anchor[0] if anchor is not None
+                else quat.rotate(np.array(q), np.array(w) * self.s.moments[0]))
+        Lb = quat.rotate(quat.conjugate(np.array(q1)), L_in).tolist()
+        return q1, (Lb[0] / I1, Lb[1] / I2, Lb[2] / I3)
 
     @staticmethod
     def axpy(w, tau, a):
@@ -940,8 +1100,9 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     body_list, single = as_bodies(bodies)
     system = _System(body_list, torques)
     n = system.n
-    name, sorder, ops_step = _resolve_scheme(order, scheme, not system.drag_terms)
-    if name in RKN_SCHEMES and system.drag_terms:
+    attitude_only = not (system.drag_terms or system.internal_terms)
+    name, sorder, ops_step = _resolve_scheme(order, scheme, attitude_only)
+    if name in RKN_SCHEMES and not attitude_only:
         raise InvalidStateError(f"scheme {name!r} needs attitude-only torques (its order "
                                 "conditions assume them); with velocity-dependent torques "
                                 "use 'blanes-moan', 'strang', 'yoshida4' or 'yoshida6'")
@@ -970,7 +1131,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     q_p0, w_p0 = system.to_principal(q0, w0)
 
     if step is None:
-        h_max = _choose_step(system, q_p0, w_p0, sorder, steps_per_period)
+        h_max = _choose_step(system, q_p0, w_p0, sorder, steps_per_period, t0)
     else:
         h_max = float(step)
         if not (h_max > 0 and math.isfinite(h_max)):
@@ -978,7 +1139,8 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                                     f"{step!r}")
     has_kick = bool(system.kick_terms)
     has_drag = bool(system.drag_terms)
-    if not (has_kick or has_drag):
+    has_internal = bool(system.internal_terms)
+    if not (has_kick or has_drag or has_internal):
         ops_step = (("F", 1.0),)            # no torque: the free flow alone is exact
     rk_order = 2 if sorder == 2 else 4
 
@@ -994,6 +1156,9 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         plan.append((idx, counts))
         total += sum(_n_free(ops_step, c) for c in counts)
     ops = _One(system) if n == 1 else _Batch(system)
+    # internal torques alone keep the inertial L: every kick restores the initial one
+    anchor = (quat.rotate(q_p0, w_p0 * system.moments)
+              if has_internal and not (has_kick or has_drag) else None)
     bar = _Progress(total, progress)
     try:
         for idx, counts in plan:
@@ -1016,6 +1181,9 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                             nf += 1
                             if nf & 1023 == 0:
                                 bar.update(1024)
+                        elif has_internal:
+                            q, w = ops.internal(t0 + t_now + acc * h, q, w, cc * h, rk_order,
+                                                anchor)
                         else:
                             w, cached = _kick(ops, t0 + t_now + acc * h, q, w, cc * h, cached,
                                               has_kick, has_drag, rk_order)
