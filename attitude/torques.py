@@ -395,6 +395,15 @@ class SumTorque(TorqueModel):
     ----------
     *terms : torque models or plain functions
         Nested sums are flattened.
+
+    Examples
+    --------
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import ConstantTorque
+    >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> both = ConstantTorque([1e-3, 0, 0]) + ConstantTorque([0, 2e-3, 0])
+    >>> type(both).__name__, both(0.0, [0, 0, 0, 1], [0.0, 0.0, 0.1], body)
+    ('SumTorque', array([0.001, 0.002, 0.   ]))
     """
 
     def __init__(self, *terms):
@@ -455,6 +464,16 @@ class FunctionTorque(TorqueModel):
     internal : bool
         Declare ``True`` for a torque between parts of the body (normal to ``L``): the
         integrators then keep the inertial angular momentum (:attr:`TorqueModel.internal`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import FunctionTorque
+    >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> drag = FunctionTorque(lambda t, q, w, b: -1e-3 * np.asarray(w))   # rate damping
+    >>> drag(0.0, [0, 0, 0, 1], [0.0, 0.0, 2.0], body)
+    array([-0.   , -0.   , -0.002])
     """
 
     def __init__(self, function: Callable, *, velocity_dependent: bool = True,
@@ -660,6 +679,16 @@ class ConstantTorque(TorqueModel):
     torque : (3,) array-like, Quantity or ``{value, unit}``
         N m.
     frame : {"body", "inertial"}
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import ConstantTorque
+    >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> half_turn_z = [0, 0, 1.0, 0]                     # body x along inertial -x
+    >>> ConstantTorque([1e-3, 0, 0], frame="inertial")(0.0, half_turn_z, [0, 0, 0], body)
+    array([-0.001,  0.   ,  0.   ])
     """
 
     velocity_dependent = False
@@ -983,7 +1012,15 @@ def damping_timescale(diameter, density, *, period=None, spin_rate=None,
 
 
 class UniformField:
-    """A magnetic field constant in inertial space, T (callable ``t -> (..., 3)``)."""
+    """A magnetic field constant in inertial space, T (callable ``t -> (..., 3)``).
+
+    Examples
+    --------
+    >>> from attitude.torques import UniformField
+    >>> UniformField([0.0, 0.0, 3e-5])([0.0, 60.0])
+    array([[0.e+00, 0.e+00, 3.e-05],
+           [0.e+00, 0.e+00, 3.e-05]])
+    """
 
     def __init__(self, field):
         self.vector = _quantity(field, "T", "field", shape=(3,))
@@ -1031,6 +1068,16 @@ class TiltedDipoleField:
        Reidel. Sec. 5.1 and App. H (dipole model of the geomagnetic field).
     .. [2] Alken, P. et al. (2021). International Geomagnetic Reference Field: the
        thirteenth generation. *Earth Planets Space* 73, 49.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.orbit import KeplerOrbit
+    >>> from attitude.torques import TiltedDipoleField
+    >>> leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6871 km", i="51.6 deg")
+    >>> b = TiltedDipoleField(leo)(np.linspace(0.0, leo.period, 7))
+    >>> bool(np.all((np.linalg.norm(b, axis=-1) > 1.5e-5) & (np.linalg.norm(b, axis=-1) < 6e-5)))
+    True
     """
 
     def __init__(self, orbit, *, moment=EARTH_DIPOLE_MOMENT, tilt=EARTH_DIPOLE_TILT,
@@ -1112,6 +1159,17 @@ class EddyCurrentDamping(TorqueModel):
     .. [2] Praly, N., Hillion, M., Bonnal, C., Laurent-Varin, J. & Petit, N. (2012).
        Study on the eddy current damping of the spin dynamics of space debris from the
        Ariane upper stage. *Acta Astronautica* 76, 145-153.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import EddyCurrentDamping, UniformField
+    >>> body = RigidBody.from_principal_moments([10.0, 10.0, 10.0])
+    >>> damper = EddyCurrentDamping.solid_sphere("0.5 m", "3.5e7 S/m", UniformField([0, 0, 3e-5]))
+    >>> m = damper(0.0, [0, 0, 0, 1], [0.1, 0.0, 0.1], body)
+    >>> bool(m[0] < 0 and abs(m[2]) < 1e-20)      # brakes the spin across B, not along it
+    True
     """
 
     velocity_dependent = True
@@ -1236,6 +1294,17 @@ class HeavyTopPivot(TorqueModel):
     ----------
     .. [1] Goldstein, H., Poole, C. & Safko, J. (2002). *Classical Mechanics*, 3rd ed.
        Addison-Wesley. Sec. 5.7 (heavy symmetrical top).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import HeavyTopPivot
+    >>> top = HeavyTopPivot(mass=1.0, pivot_to_com=[0.0, 0.0, 0.1])   # 10 cm up the axis
+    >>> body = RigidBody.from_principal_moments([0.02, 0.02, 0.01])
+    >>> tilted = [np.sin(0.25), 0.0, 0.0, np.cos(0.25)]               # axis 0.5 rad from up
+    >>> round(float(np.linalg.norm(top(0.0, tilted, [0, 0, 50.0], body))), 6)   # m g l sin
+    0.47016
     """
 
     velocity_dependent = False

@@ -379,6 +379,17 @@ def free_flow(moments, quat, omega, h):
     :func:`attitude.propagation.torquefree.free_rotation` in ``tests/test_splitting.py``);
     near the separatrix the motion itself is ill-conditioned and ``scipy.special.ellipj``
     loses ~``eps / m1`` relative.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.splitting import free_flow
+    >>> from attitude.propagation.torquefree import free_rotation
+    >>> I, q0, w0 = np.array([1.0, 2.0, 3.0]), np.array([0, 0, 0, 1.0]), np.array([0.1, 0.2, 1.0])
+    >>> q1, w1 = free_flow(I, q0, w0, 2.5)
+    >>> q2, w2 = free_rotation(I, q0, w0, [2.5])
+    >>> bool(np.allclose(w1, w2[0], rtol=0, atol=1e-14) and abs(abs(q1 @ q2[0]) - 1) < 1e-14)
+    True
     """
     moments = np.asarray(moments, dtype=float)
     quat = np.asarray(quat, dtype=float)
