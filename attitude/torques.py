@@ -72,7 +72,7 @@ from .body import SYMMETRY_RTOL, RigidBody
 from .errors import OrbitError, TorqueConfigError
 from .orbit import KeplerOrbit, as_path
 from .quantities import to_si
-from .spec import SYNONYMS, Key, Table, validate
+from .spec import SYNONYMS, Key, Table, json_schema, validate
 
 __all__ = [
     "TorqueModel",
@@ -1374,7 +1374,7 @@ class HeavyTopPivot(TorqueModel):
 
 #: An inline orbit table ``orbit = { a = "7000 km", e = 0.0, ... }``.
 ORBIT_TABLE = Table("orbit", (
-    Key("a", "quantity", unit="m", required=True, positive=True, doc="semi-major axis"),
+    Key("a", "quantity", unit="m", positive=True, doc="semi-major axis"),
     Key("e", "quantity", unit="", bounds=(0.0, None), default=0,
         doc="eccentricity, 0 <= e < 1"),
     Key("i", "quantity", unit="rad", default=0, doc="inclination"),
@@ -1383,11 +1383,27 @@ ORBIT_TABLE = Table("orbit", (
     Key("argp", "quantity", unit="rad", default=0, doc="argument of periapsis"),
     Key("mean_anomaly", "quantity", unit="rad", default=0, doc="mean anomaly at `epoch`"),
     Key("epoch", "time", doc="when `mean_anomaly` holds; default the scenario epoch"),
-), doc="Keplerian elements of the body's orbit about the primary, inertial frame")
+    Key("tle", "any", schema={"type": "array", "items": {"type": "string"}, "minItems": 2,
+                              "maxItems": 2},
+        doc="a two-line element set instead of the elements: SGP4 in GCRF "
+            "(attitude.environment.TLEOrbit; t = 0 at the scenario epoch)"),
+), exactly_one=(("a", "tle"),),
+    excludes=(("tle", ("e", "i", "raan", "argp", "mean_anomaly", "epoch")),),
+    doc="The body's orbit about the primary, inertial frame: Keplerian elements, or a "
+        "two-line element set")
+
+#: Builders of the orbit and field sources that live in a wing
+#: (:mod:`attitude.environment` registers ``"tle"`` and ``"igrf"`` when imported):
+#: ``ORBIT_SOURCES["tle"](lines, base_epoch)`` and
+#: ``FIELD_SOURCES["igrf"](orbit, base_epoch, max_degree)``.
+ORBIT_SOURCES: dict[str, Callable] = {}
+FIELD_SOURCES: dict[str, Callable] = {}
 
 _FIELD_TABLE = Table("field", (
-    Key("model", "string", choices=("dipole", "uniform"), default="dipole",
-        doc="the Earth's tilted dipole along `orbit`, or a uniform field"),
+    Key("model", "string", choices=("dipole", "uniform", "igrf"), default="dipole",
+        doc="the Earth's tilted dipole along `orbit`, a uniform field, or IGRF-14 along "
+            "`orbit` (attitude.environment.IGRF; `field = \"igrf\"` for short)"),
+    Key("max_degree", "integer", bounds=(1, 13), default=13, doc="IGRF: highest degree"),
     Key("moment", "quantity", unit="A m2", positive=True, doc="dipole moment"),
     Key("tilt", "quantity", unit="rad", doc="dipole tilt from the inertial z axis"),
     Key("pole_longitude", "quantity", unit="rad", doc="longitude of the dipole pole"),
@@ -1396,7 +1412,7 @@ _FIELD_TABLE = Table("field", (
     Key("rotation_rate", "quantity", unit="rad/s", doc="Earth rotation rate"),
     Key("vector", "quantity", unit="T", shape=(3,), doc="uniform field, inertial frame"),
 ), excludes=(("vector", ("moment", "tilt", "pole_longitude", "rotation_angle",
-                          "rotation_rate")),))
+                          "rotation_rate", "max_degree")),))
 
 #: The keys of each ``[[torques]]`` type (``type`` selects the table).
 TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
@@ -1426,8 +1442,11 @@ TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
             Key("radius", "quantity", unit="m", required=True, positive=True),
             Key("conductivity", "quantity", unit="S/m", required=True, positive=True))),
             doc="solid conducting sphere"),
-        Key("field", "table", table=_FIELD_TABLE,
-            doc="the magnetic field; default the Earth's tilted dipole"),
+        Key("field", "any",
+            schema={"oneOf": [{"type": "string", "enum": ["dipole", "igrf", "uniform"]},
+                              json_schema(_FIELD_TABLE, root=False)]},
+            doc="the magnetic field: a table, or the model name (\"igrf\"); default the "
+                "Earth's tilted dipole"),
         Key("mu", "quantity", unit="m3/s2", positive=True,
             doc="gravitational parameter of the primary (dipole field); default the Earth's"),
         Key("orbit", "table", table=ORBIT_TABLE, doc=ORBIT_TABLE.doc + " (dipole field)"),
@@ -1444,6 +1463,14 @@ TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
 
 def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
     """A validated :data:`ORBIT_TABLE` (SI values; ``epoch`` an astropy Time) -> orbit."""
+    if "tle" in table:
+        if "tle" not in ORBIT_SOURCES:
+            raise TorqueConfigError("a TLE orbit needs attitude.environment (import "
+                                    "attitude)", key=f"{key}.tle")
+        try:
+            return ORBIT_SOURCES["tle"](table["tle"], base_epoch)
+        except OrbitError as err:
+            raise TorqueConfigError(err.reason, key=f"{key}.{err.key}") from None
     elements = {k: table[k] for k in ORBIT_TABLE.names() if k in table and k != "epoch"}
     try:
         orbit = KeplerOrbit(mu=mu, **elements)
@@ -1488,7 +1515,8 @@ def _dissipation(table, base_epoch):
 
 _FIELD_KEYS = {"dipole": ("model", "moment", "tilt", "pole_longitude", "rotation_angle",
                           "rotation_rate"),
-               "uniform": ("model", "vector")}
+               "uniform": ("model", "vector"),
+               "igrf": ("model", "max_degree")}
 
 
 def _prefixed(prefix: str, build: Callable, *args, **kwargs):
@@ -1501,6 +1529,9 @@ def _prefixed(prefix: str, build: Callable, *args, **kwargs):
 
 def _field_from_table(table, base_epoch):
     field_table = table.get("field", {"model": "dipole"})
+    if isinstance(field_table, str):                 # field = "igrf": the model by name
+        field_table = {"model": field_table}
+    field_table = validate(field_table, _FIELD_TABLE, where="field", error=TorqueConfigError)
     model = field_table.get("model", "dipole")
     _check_keys(field_table, _FIELD_KEYS[model], "field")
     if model == "uniform":
@@ -1516,6 +1547,13 @@ def _field_from_table(table, base_epoch):
                                 "body's orbit (or use field.model = \"uniform\")", key="orbit")
     mu = table.get("mu", EARTH_MU)
     orbit = _orbit_from_table(table["orbit"], mu, "orbit", base_epoch)
+    if model == "igrf":
+        if base_epoch is None:
+            raise TorqueConfigError("the IGRF field needs the scenario epoch", key="field")
+        try:
+            return FIELD_SOURCES["igrf"](orbit, base_epoch, field_table.get("max_degree", 13))
+        except OrbitError as err:
+            raise TorqueConfigError(err.reason, key=f"field.{err.key}") from None
     kwargs = {k: field_table[k] for k in _FIELD_KEYS["dipole"][1:] if k in field_table}
     if "rotation_angle" not in kwargs and base_epoch is not None:
         kwargs["rotation_angle"] = _earth_rotation_angle(base_epoch)

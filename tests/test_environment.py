@@ -7,6 +7,8 @@
   limiting cases and its continuity through the penumbra.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from astropy import units as u
@@ -213,3 +215,24 @@ def test_eddy_current_spin_down_in_igrf_follows_the_averaged_closed_form():
     decay = np.linalg.norm(w0) - np.linalg.norm(predicted)
     assert decay > 0.2 * np.linalg.norm(w0)                       # a real spin-down
     assert abs(np.linalg.norm(w_end) - np.linalg.norm(predicted)) < 0.01 * decay
+
+
+def test_scenario_keys_tle_orbit_and_igrf_field(tmp_path, capsys):
+    """`orbit = { tle = [...] }` and `field = "igrf"` in a [[torques]] table: the run
+    builds a TLEOrbit and an IGRF field (the same eddy-current torque as from Python), and
+    a corrupted element set exits 2 naming the key."""
+    from attitude.cli import main
+    from attitude.scenario import load_scenario
+    from attitude.torques import EddyCurrentDamping
+    path = Path(__file__).parent / "data" / "igrf_tle_despin.toml"
+    sc = load_scenario(path)
+    torque = sc.torques[0]
+    assert isinstance(torque, EddyCurrentDamping)
+    assert isinstance(torque.field, IGRF) and isinstance(torque.field.orbit, TLEOrbit)
+    direct = IGRF(TLEOrbit(*ISS, epoch=sc.state.epoch))
+    assert np.abs(torque.field(T[:5]) - direct(T[:5])).max() < 1e-15
+    bad = path.read_text().replace("0  9005", "0  9006")          # checksum broken
+    (tmp_path / "bad.toml").write_text(bad)
+    assert main(["run", str(tmp_path / "bad.toml"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "torques[0].orbit.tle[0]" in err and "checksum" in err

@@ -15,11 +15,29 @@ The packages ``sgp4`` and ``ppigrf`` come with the ``environment`` extra
 (``pip install "attitude-dynamics[environment]"``).
 """
 
+from .. import torques as _torques
+from ..errors import OrbitError
 from .frames import EARTH_FRAMES, inertial_to_earth_fixed, teme_to_inertial
 from .igrf import IGRF, IGRF_VALIDITY
 from .sun import EARTH_RADIUS, SUN_RADIUS, SunPath, illumination
 from .tabulation import TimeTable
 from .tle import TLEOrbit
+
+
+def _tle_source(lines, base_epoch):
+    if not (isinstance(lines, (list, tuple)) and len(lines) == 2):
+        raise OrbitError("expected the two lines of the element set, [line1, line2]",
+                         key="tle")
+    return TLEOrbit(*lines, epoch=base_epoch)
+
+
+def _igrf_source(orbit, base_epoch, max_degree):
+    return IGRF(orbit, epoch=base_epoch, max_degree=max_degree)
+
+
+# scenario files: orbit = { tle = [...] } and field = "igrf" in [[torques]] tables
+_torques.ORBIT_SOURCES["tle"] = _tle_source
+_torques.FIELD_SOURCES["igrf"] = _igrf_source
 
 __all__ = [
     "TLEOrbit",

@@ -113,7 +113,8 @@ class IGRF:
 
     def _check_span(self, times: Time, t: np.ndarray) -> None:
         lo, hi = IGRF_VALIDITY
-        outside = (times < lo) | (times > hi)
+        tt = times.tt.jd                        # compared in TT: UTC has no 1900
+        outside = (tt < lo.jd) | (tt > hi.jd)
         if np.any(outside):
             i = int(np.flatnonzero(outside)[0])
             raise OrbitError(f"t = {t[i]:.0f} s ({times[i].utc.isot} UTC) lies outside "
