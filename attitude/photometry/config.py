@@ -192,120 +192,27 @@ PHOTOMETRY_SCHEMA = {
         }
     }
 }
+def _tolerance_schema(value: dict, description: str) -> dict:
+    """JSON Schema of a lightcurve expectation: ``value`` and one of the tolerances."""
+    return {"type": "object",
+            "properties": {"value": value, "unit": {"type": "string"},
+                           "rel_tol": {"type": "number", "minimum": 0},
+                           "abs_tol": {"type": "number", "minimum": 0}},
+            "additionalProperties": False, "required": ["value"],
+            "oneOf": [{"required": ["rel_tol"]}, {"required": ["abs_tol"]}],
+            "description": description}
+
+
 #: JSON Schemas of the lightcurve ``[expect]`` keys.
 EXPECT_SCHEMAS = {
-    "lightcurve_period": {
-        "type": "object",
-        "properties": {
-            "value": {
-                "type": "number"
-            },
-            "unit": {
-                "type": "string"
-            },
-            "rel_tol": {
-                "type": "number",
-                "minimum": 0
-            },
-            "abs_tol": {
-                "type": "number",
-                "minimum": 0
-            }
-        },
-        "additionalProperties": False,
-        "required": [
-            "value"
-        ],
-        "oneOf": [
-            {
-                "required": [
-                    "rel_tol"
-                ]
-            },
-            {
-                "required": [
-                    "abs_tol"
-                ]
-            }
-        ],
-        "description": "photometry: the double-peaked lightcurve period (default unit s)"
-    },
-    "lightcurve_amplitude": {
-        "type": "object",
-        "properties": {
-            "value": {
-                "type": "number"
-            },
-            "unit": {
-                "type": "string"
-            },
-            "rel_tol": {
-                "type": "number",
-                "minimum": 0
-            },
-            "abs_tol": {
-                "type": "number",
-                "minimum": 0
-            }
-        },
-        "additionalProperties": False,
-        "required": [
-            "value"
-        ],
-        "oneOf": [
-            {
-                "required": [
-                    "rel_tol"
-                ]
-            },
-            {
-                "required": [
-                    "abs_tol"
-                ]
-            }
-        ],
-        "description": "photometry: peak-to-peak amplitude (default unit mag)"
-    },
-    "lightcurve_lattice": {
-        "type": "object",
-        "properties": {
-            "value": {
-                "type": "array",
-                "items": {
-                    "type": "number"
-                },
-                "minItems": 1
-            },
-            "unit": {
-                "type": "string"
-            },
-            "rel_tol": {
-                "type": "number",
-                "minimum": 0
-            },
-            "abs_tol": {
-                "type": "number",
-                "minimum": 0
-            }
-        },
-        "additionalProperties": False,
-        "required": [
-            "value"
-        ],
-        "oneOf": [
-            {
-                "required": [
-                    "rel_tol"
-                ]
-            },
-            {
-                "required": [
-                    "abs_tol"
-                ]
-            }
-        ],
-        "description": "photometry: periods whose frequencies lie on the fitted lattice n1/P1 + n2/P2 within rel_tol"  # noqa: E501
-    }
+    "lightcurve_period": _tolerance_schema(
+        {"type": "number"}, "photometry: the double-peaked lightcurve period (default unit s)"),
+    "lightcurve_amplitude": _tolerance_schema(
+        {"type": "number"}, "photometry: peak-to-peak amplitude (default unit mag)"),
+    "lightcurve_lattice": _tolerance_schema(
+        {"type": "array", "items": {"type": "number"}, "minItems": 1},
+        "photometry: periods whose frequencies lie on the fitted lattice n1/P1 + n2/P2 "
+        "within rel_tol"),
 }
 
 __all__ = ["PhotometryConfig", "LightcurveRun", "parse_photometry", "run_lightcurve",

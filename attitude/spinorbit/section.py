@@ -41,104 +41,28 @@ from .libration import long_axis_angle, measure_libration
 from .model import SpinOrbit
 from .planar import periodic_orbit
 
+#: A grid axis of the ``[section]`` table: a list, or ``{min, max, count, unit}``.
+_GRID_SCHEMA = {"oneOf": [
+    {"type": "array", "items": {"type": "number"}, "minItems": 1},
+    {"type": "object", "properties": {"min": {"type": "number"}, "max": {"type": "number"},
+                                      "count": {"type": "integer", "minimum": 1},
+                                      "unit": {"type": "string"}},
+     "required": ["min", "max", "count"], "additionalProperties": False},
+]}
 #: JSON Schema of the ``[section]`` table (declared in
 #: :data:`attitude.scenario_spec.SCENARIO`; :func:`parse_section` checks the same keys).
 SECTION_SCHEMA = {
     "type": "object",
-    "description": "Spin-orbit surface of section (attitude section): grid of initial conditions at periapsis, angles (rad or {min, max, count, unit}) and rates (spin rate / mean motion).",  # noqa: E501
-    "properties": {
-        "n_orbits": {
-            "type": "integer",
-            "minimum": 1
-        },
-        "angles": {
-            "oneOf": [
-                {
-                    "type": "array",
-                    "items": {
-                        "type": "number"
-                    },
-                    "minItems": 1
-                },
-                {
-                    "type": "object",
-                    "properties": {
-                        "min": {
-                            "type": "number"
-                        },
-                        "max": {
-                            "type": "number"
-                        },
-                        "count": {
-                            "type": "integer",
-                            "minimum": 1
-                        },
-                        "unit": {
-                            "type": "string"
-                        }
-                    },
-                    "required": [
-                        "min",
-                        "max",
-                        "count"
-                    ],
-                    "additionalProperties": False
-                }
-            ]
-        },
-        "rates": {
-            "oneOf": [
-                {
-                    "type": "array",
-                    "items": {
-                        "type": "number"
-                    },
-                    "minItems": 1
-                },
-                {
-                    "type": "object",
-                    "properties": {
-                        "min": {
-                            "type": "number"
-                        },
-                        "max": {
-                            "type": "number"
-                        },
-                        "count": {
-                            "type": "integer",
-                            "minimum": 1
-                        },
-                        "unit": {
-                            "type": "string"
-                        }
-                    },
-                    "required": [
-                        "min",
-                        "max",
-                        "count"
-                    ],
-                    "additionalProperties": False
-                }
-            ]
-        },
-        "lyapunov": {
-            "type": "boolean"
-        },
-        "rtol": {
-            "type": "number"
-        },
-        "seed": {
-            "type": "integer",
-            "minimum": 0
-        },
-        "netcdf": {
-            "type": "string"
-        }
-    },
-    "required": [
-        "angles",
-        "rates"
-    ],
+    "description": ("Spin-orbit surface of section (attitude section): grid of initial "
+                    "conditions at periapsis, angles (rad or {min, max, count, unit}) and "
+                    "rates (spin rate / mean motion)."),
+    "properties": {"n_orbits": {"type": "integer", "minimum": 1},
+                   "angles": _GRID_SCHEMA, "rates": _GRID_SCHEMA,
+                   "lyapunov": {"type": "boolean"},
+                   "rtol": {"type": "number"},
+                   "seed": {"type": "integer", "minimum": 0},
+                   "netcdf": {"type": "string"}},
+    "required": ["angles", "rates"],
     "additionalProperties": False
 }
 #: JSON Schemas of the spin-orbit ``[expect]`` keys.
