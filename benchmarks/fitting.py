@@ -1,9 +1,11 @@
 """Fitting: forward-model evaluations per second, one parameter vector at a time and
 batched over the walkers of an MCMC step (issue: fitting).
 
-Model: the exact torque-free solution at 1000 observation epochs (the forward model of
-attitude.fitting), for one parameter vector per call (the loop a least-squares solver or a
-plain sampler makes) and for 64 vectors per call (emcee with vectorize=True).
+Models: (1) attitudes and rates from the exact torque-free solution at 1000 observation
+epochs; (2) a 1000-point lightcurve of a 1280-facet ellipsoid (the exact solution, then
+the facet brightness under Lommel-Seeliger + 0.1 Lambert): for one parameter vector per
+call (the loop a least-squares solver or a plain sampler makes) and for 64 vectors per
+call (emcee with vectorize=True).
 
     python benchmarks/fitting.py
 """
@@ -48,6 +50,24 @@ def main():
     print("| --- | ---: |")
     print(f"| one vector per call (loop) | {N_WALKERS / loop:,.0f} |")
     print(f"| {N_WALKERS} vectors per call (batch) | {N_WALKERS / batch:,.0f} |")
+    print(f"| batch / loop | {loop / batch:.1f}x |")
+
+    shape = att.Polyhedron.ellipsoid_from_moments(body.principal_moments, subdivisions=3)
+    geom = att.Geometry(sun=[1.0, 0.0, 0.0], observer=[np.cos(0.35), np.sin(0.35), 0.1])
+    obs = att.LightcurveObservations(t, np.zeros(t.size), 0.01, geom, shape)
+
+    def magnitudes(x):
+        q, _ = model.evaluate(x, t)
+        return obs.model_magnitudes(q)
+
+    loop = best_of(lambda: [magnitudes(w[None]) for w in walkers], n=2)
+    batch = best_of(lambda: magnitudes(walkers), n=2)
+    print()
+    print(f"lightcurve model: {N_EPOCHS} epochs, {len(shape.faces)} facets, {N_WALKERS} walkers")
+    print("| evaluation | model evaluations / s |")
+    print("| --- | ---: |")
+    print(f"| one vector per call (loop) | {N_WALKERS / loop:,.1f} |")
+    print(f"| {N_WALKERS} vectors per call (batch) | {N_WALKERS / batch:,.1f} |")
     print(f"| batch / loop | {loop / batch:.1f}x |")
 
 
