@@ -190,7 +190,7 @@ class AerodynamicDrag(EnvironmentTorque):
             rho = np.broadcast_to(rho, np.shape(altitude))
         if not np.all(np.isfinite(rho) & (rho >= 0)):
             bad = rho[~(np.isfinite(rho) & (rho >= 0))].flat[0]
-            raise TorqueConfigError(f"the density model gives {bad!r} kg/m^3: densities "
+            raise TorqueConfigError(f"the density model gives {float(bad):.6g} kg/m^3: densities "
                                     "must be finite and >= 0", key="density")
         return rho
 
