@@ -347,3 +347,19 @@ def test_propagation_along_the_iss_orbit(iss):
     # the same box 0.3 m off its centre of mass: the torques do change |L|
     offset = run((0.3, 0.0, 0.0))
     assert np.max(np.abs(offset / offset[0] - 1)) > 1e-6
+
+
+def test_one_epoch_fast_paths_agree_with_the_arrays():
+    from attitude.environment import illumination
+    rng = np.random.default_rng(10)
+    sun = np.array([1.496e11, 2e9, -1e9])
+    r = np.concatenate([rng.normal(size=(3000, 3)) * 1e6 + [-7e6, 6.37e6, 0.0],
+                        rng.normal(size=(300, 3)) * 7e6])
+    for model in ("conical", "cylindrical"):
+        vec = illumination(r, sun, model)
+        one = np.array([illumination(x, sun, model) for x in r])
+        # arccos near +-1 turns an ulp of its argument into ~sqrt(eps) of angle
+        np.testing.assert_allclose(one, vec, rtol=0, atol=64 * np.sqrt(EPS))
+    atm = ExponentialAtmosphere()
+    h = np.linspace(-10e3, 1500e3, 997)
+    np.testing.assert_allclose([atm(x) for x in h], atm(h), rtol=8 * EPS, atol=0)

@@ -31,6 +31,8 @@ References
 
 from __future__ import annotations
 
+import bisect
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,7 +44,7 @@ from ..quantities import to_si
 from ..torques import EARTH_ROTATION_RATE
 from .facets import Facets, as_facets
 from .sun import EARTH_RADIUS
-from .torquebase import EnvironmentTorque, check_vector
+from .torquebase import EnvironmentTorque, check_vector, cross
 
 __all__ = ["AerodynamicDrag", "ExponentialAtmosphere", "VALLADO_EXPONENTIAL_TABLE"]
 
@@ -86,6 +88,7 @@ class ExponentialAtmosphere:
     _base: np.ndarray = field(init=False, repr=False)
     _rho: np.ndarray = field(init=False, repr=False)
     _scale: np.ndarray = field(init=False, repr=False)
+    _bases: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
         try:
@@ -106,10 +109,16 @@ class ExponentialAtmosphere:
         object.__setattr__(self, "_base", rows[:, 0] * 1e3)
         object.__setattr__(self, "_rho", rows[:, 1])
         object.__setattr__(self, "_scale", rows[:, 2] * 1e3)
+        object.__setattr__(self, "_bases", tuple(self._base.tolist()))
 
     def density(self, altitude) -> np.ndarray:
         """Density at ``altitude`` (m above the reference sphere), kg/m^3."""
         h = np.asarray(altitude, dtype=float)
+        if h.ndim == 0:                                  # one epoch: plain floats
+            x = float(h)
+            k = min(max(bisect.bisect_right(self._bases, x) - 1, 0), len(self._bases) - 1)
+            return np.float64(self._rho[k] * math.exp(-(x - self._bases[k])
+                                                      / self._scale[k]))
         k = np.clip(np.searchsorted(self._base, h, side="right") - 1, 0, len(self._base) - 1)
         return self._rho[k] * np.exp(-(h - self._base[k]) / self._scale[k])
 
@@ -179,6 +188,7 @@ class AerodynamicDrag(EnvironmentTorque):
             raise TorqueConfigError(f"must be >= 0, got {self.cd!r}", key="cd")
         self.center_of_mass = check_vector(center_of_mass, "center_of_mass")
         self.corotation = bool(corotation)
+        self._omega_earth = np.array([-1.0, 1.0, 0.0]) * EARTH_ROTATION_RATE
         self._check_density(np.array([200e3, 400e3, 800e3]))
         f = self.facets
         self._r = f.centroids - self.center_of_mass
@@ -188,6 +198,8 @@ class AerodynamicDrag(EnvironmentTorque):
         rho = np.asarray(self.density(altitude), dtype=float)
         if rho.shape != np.shape(altitude):
             rho = np.broadcast_to(rho, np.shape(altitude))
+        if rho.ndim == 0 and 0.0 <= float(rho) < np.inf:   # one epoch, valid: fast exit
+            return rho
         if not np.all(np.isfinite(rho) & (rho >= 0)):
             bad = rho[~(np.isfinite(rho) & (rho >= 0))].flat[0]
             raise TorqueConfigError(f"the density model gives {float(bad):.6g} kg/m^3: densities "
@@ -201,9 +213,7 @@ class AerodynamicDrag(EnvironmentTorque):
         r = np.asarray(self.orbit.position(t), dtype=float)
         v = np.asarray(self.orbit.velocity(t), dtype=float)
         if self.corotation:
-            w = EARTH_ROTATION_RATE
-            v = v - np.stack([-w * r[..., 1], w * r[..., 0], np.zeros_like(r[..., 2])],
-                             axis=-1)
+            v = v - self._omega_earth * r[..., [1, 0, 2]]   # omega_E x r = w (-y, x, 0)
         altitude = np.sqrt(np.sum(r * r, axis=-1)) - EARTH_RADIUS
         rho = self._check_density(altitude)
         return v, 0.5 * rho * np.sum(v * v, axis=-1) * self.cd
@@ -218,7 +228,7 @@ class AerodynamicDrag(EnvironmentTorque):
 
     def evaluate(self, t, quaternion, omega_body, body):
         v_hat, q, c = self._weights(t, quaternion)
-        return -q * np.cross(c @ self._ar, v_hat)
+        return -q * cross(c @ self._ar, v_hat)
 
     def force(self, t, quaternion) -> np.ndarray:
         """Total drag force, body frame, N, shape ``broadcast + (3,)``."""

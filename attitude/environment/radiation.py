@@ -45,7 +45,7 @@ from ..orbit import as_path
 from ..quantities import to_si
 from .facets import Facets, as_facets
 from .sun import SHADOW_MODELS, illumination
-from .torquebase import EnvironmentTorque, check_vector
+from .torquebase import EnvironmentTorque, check_vector, cross
 
 __all__ = ["SolarRadiationPressure", "SOLAR_PRESSURE_1AU", "ASTRONOMICAL_UNIT"]
 
@@ -149,7 +149,7 @@ class SolarRadiationPressure(EnvironmentTorque):
 
     def evaluate(self, t, quaternion, omega_body, body):
         s, p, w, u = self._weights(t, quaternion)
-        return -p * (np.cross(w @ self._r, s) + 2.0 * (u @ self._rxn))
+        return -p * (cross(w @ self._r, s) + 2.0 * (u @ self._rxn))
 
     def force(self, t, quaternion) -> np.ndarray:
         """Total radiation force, body frame, N, shape ``broadcast + (3,)``.

@@ -76,6 +76,11 @@ class TimeTable:
 
     def _call(self, t, nu: int) -> np.ndarray:
         t = np.asarray(t, dtype=float)
+        if t.ndim == 0:                  # one epoch (an integrator's stage): no masks
+            x = float(t)
+            if not np.isfinite(x):
+                raise ValueError("times must be finite")
+            return self._spline(int(np.floor(x / self.segment)))(x, nu)
         flat = t.reshape(-1)
         if not np.all(np.isfinite(flat)):
             raise ValueError("times must be finite")
