@@ -193,6 +193,7 @@ class AerodynamicDrag(EnvironmentTorque):
         f = self.facets
         self._r = f.centroids - self.center_of_mass
         self._ar = f.areas[:, None] * self._r                     # (n, 3): A_k r_k
+        self._normals = np.ascontiguousarray(f.normals)
 
     def _check_density(self, altitude) -> np.ndarray:
         rho = np.asarray(self.density(altitude), dtype=float)
@@ -227,8 +228,30 @@ class AerodynamicDrag(EnvironmentTorque):
         return v_hat, np.asarray(q)[..., None], c
 
     def evaluate(self, t, quaternion, omega_body, body):
+        if t.ndim == 0 and quaternion.ndim == 1:
+            return self._one_epoch(float(t), quaternion)
         v_hat, q, c = self._weights(t, quaternion)
         return -q * cross(c @ self._ar, v_hat)
+
+    def _one_epoch(self, t: float, quaternion: np.ndarray) -> np.ndarray:
+        """:meth:`evaluate` at one epoch and attitude, in floats where numpy is slow."""
+        t = self.time(t)
+        x, y, z = np.asarray(self.orbit.position(t), dtype=float).tolist()
+        vx, vy, vz = np.asarray(self.orbit.velocity(t), dtype=float).tolist()
+        if self.corotation:
+            vx, vy = vx + EARTH_ROTATION_RATE * y, vy - EARTH_ROTATION_RATE * x
+        rho = float(self._check_density(np.float64(math.sqrt(x * x + y * y + z * z)
+                                                   - EARTH_RADIUS)))
+        v2 = vx * vx + vy * vy + vz * vz
+        if v2 == 0.0 or rho == 0.0:
+            return np.zeros(3)
+        speed = math.sqrt(v2)
+        v_hat = np.array(quat.rotate_parts(quaternion.tolist(),
+                                           (vx / speed, vy / speed, vz / speed),
+                                           inverse=True))
+        c = self._normals @ v_hat
+        np.maximum(c, 0.0, out=c)
+        return (-0.5 * rho * v2 * self.cd) * cross(c @ self._ar, v_hat)
 
     def force(self, t, quaternion) -> np.ndarray:
         """Total drag force, body frame, N, shape ``broadcast + (3,)``."""

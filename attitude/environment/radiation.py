@@ -37,6 +37,8 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import quaternion as quat
@@ -121,6 +123,7 @@ class SolarRadiationPressure(EnvironmentTorque):
         self.shadow = shadow
         f = self.facets
         self._r = f.centroids - self.center_of_mass                # (n, 3)
+        self._normals = np.ascontiguousarray(f.normals)
         self._rxn = np.cross(self._r, f.normals)                    # (n, 3)
         self._one_minus_s = f.areas * (1.0 - f.specular)            # A (1 - rho_s)
         self._spec = f.areas * f.specular                           # A rho_s
@@ -148,7 +151,29 @@ class SolarRadiationPressure(EnvironmentTorque):
         return s, np.asarray(p)[..., None], w, u
 
     def evaluate(self, t, quaternion, omega_body, body):
+        if t.ndim == 0 and quaternion.ndim == 1:
+            return self._one_epoch(float(t), quaternion)
         s, p, w, u = self._weights(t, quaternion)
+        return -p * (cross(w @ self._r, s) + 2.0 * (u @ self._rxn))
+
+    def _one_epoch(self, t: float, quaternion: np.ndarray) -> np.ndarray:
+        """:meth:`evaluate` at one epoch and attitude, in floats where numpy is slow."""
+        t = self.time(t)
+        r_sun = np.asarray(self.sun.position(t), dtype=float)
+        r_sat = np.asarray(self.orbit.position(t), dtype=float)
+        dx, dy, dz = (r_sun - r_sat).tolist()
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        p = self.pressure * (ASTRONOMICAL_UNIT / dist) ** 2
+        if self.shadow is not None:
+            p *= float(illumination(r_sat, r_sun, self.shadow))
+        if p == 0.0:
+            return np.zeros(3)
+        s = np.array(quat.rotate_parts(quaternion.tolist(),
+                                       (dx / dist, dy / dist, dz / dist), inverse=True))
+        c = self._normals @ s
+        np.maximum(c, 0.0, out=c)
+        w = c * self._one_minus_s
+        u = c * (c * self._spec + self._diff)
         return -p * (cross(w @ self._r, s) + 2.0 * (u @ self._rxn))
 
     def force(self, t, quaternion) -> np.ndarray:

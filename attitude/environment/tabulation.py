@@ -61,6 +61,7 @@ class TimeTable:
         self.derivative = derivative
         self._nodes = n
         self._splines: dict[int, Callable] = {}
+        self._last: dict[int, tuple] = {}        # derivative order -> (t, value)
 
     def _spline(self, k: int) -> Callable:
         spline = self._splines.get(k)
@@ -78,9 +79,14 @@ class TimeTable:
         t = np.asarray(t, dtype=float)
         if t.ndim == 0:                  # one epoch (an integrator's stage): no masks
             x = float(t)
+            last = self._last.get(nu)
+            if last is not None and last[0] == x:   # several torques ask at one stage
+                return last[1].copy()
             if not np.isfinite(x):
                 raise ValueError("times must be finite")
-            return self._spline(int(np.floor(x / self.segment)))(x, nu)
+            value = self._spline(int(np.floor(x / self.segment)))(x, nu)
+            self._last[nu] = (x, value)
+            return value.copy()
         flat = t.reshape(-1)
         if not np.all(np.isfinite(flat)):
             raise ValueError("times must be finite")
