@@ -363,3 +363,17 @@ def test_one_epoch_fast_paths_agree_with_the_arrays():
     atm = ExponentialAtmosphere()
     h = np.linspace(-10e3, 1500e3, 997)
     np.testing.assert_allclose([atm(x) for x in h], atm(h), rtol=8 * EPS, atol=0)
+
+
+def test_one_epoch_table_lookup_is_the_spline():
+    from attitude.environment import TimeTable
+    table = TimeTable(lambda t: np.stack([np.sin(t / 300), np.cos(t / 70), t / 1e3], -1),
+                      spacing=10.0, segment=400.0)
+    t = np.concatenate([np.linspace(-900.0, 2000.0, 1001), [0.0, 400.0, 399.999999]])
+    many, rates = table(t), table.rate(t)
+    one = np.array([table(x) for x in t])
+    one_rate = np.array([table.rate(x) for x in t])
+    # Horner's rule and scipy's evaluation of the same cubic: a few ulps of the terms
+    np.testing.assert_allclose(one, many, rtol=0, atol=16 * EPS)
+    np.testing.assert_allclose(one_rate, rates, rtol=0, atol=16 * EPS / 10.0 * 3)
+    assert table(5.0) is not table(5.0)            # the cached value is not shared

@@ -187,11 +187,6 @@ class Facets:
                 centroids.append(center + 0.5 * size[i] * e)
         return cls(areas, normals, centroids, specular, diffuse)
 
-    def moved(self, offset) -> Facets:
-        """The same facets with the centroids taken relative to ``offset`` (m)."""
-        return Facets(self.areas, self.normals, self.centroids - np.asarray(offset, float),
-                      self.specular, self.diffuse)
-
 
 def as_facets(shape, surface=None) -> Facets:
     """:class:`Facets` from a ``Facets``, a ``Surface``, or a ``Polyhedron`` with optional
