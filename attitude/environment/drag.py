@@ -260,6 +260,17 @@ class AerodynamicDrag(EnvironmentTorque):
         v_hat, q, c = self._weights(np.asarray(t, dtype=float), qn)
         return -q * (c @ self.facets.areas)[..., None] * v_hat
 
+    def unit_torque(self, directions) -> np.ndarray:
+        """Torque per unit dynamic pressure ``1/2 rho v^2 C_D``, m^3, for the velocity
+        relative to the air along ``directions`` (body frame)."""
+        v_hat = np.asarray(directions, dtype=float)
+        c = np.maximum(v_hat @ self._normals.T, 0.0)
+        return -cross(c @ self._ar, v_hat)
+
+    def pressure_at(self, t) -> np.ndarray:
+        """``1/2 rho v^2 C_D`` at ``t``, N/m^2."""
+        return self.airflow(t)[1]
+
     def torque_bound(self, t) -> float:
         """``1/2 rho v^2 C_D sum_k A_k |r_k|``, N m: no attitude exceeds it."""
         _, q = self.airflow(t)

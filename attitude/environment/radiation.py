@@ -193,6 +193,18 @@ class SolarRadiationPressure(EnvironmentTorque):
         s, p, w, u = self._weights(np.asarray(t, dtype=float), q)
         return -p * (w.sum(axis=-1)[..., None] * s + 2.0 * (u @ self.facets.normals))
 
+    def unit_torque(self, directions) -> np.ndarray:
+        """Torque per unit pressure, m^3, for the Sun in ``directions`` (body frame)."""
+        s = np.asarray(directions, dtype=float)
+        c = np.maximum(s @ self._normals.T, 0.0)
+        w = c * self._one_minus_s
+        u = c * (c * self._spec + self._diff)
+        return -(cross(w @ self._r, s) + 2.0 * (u @ self._rxn))
+
+    def pressure_at(self, t) -> np.ndarray:
+        """Radiation pressure at the body times the visible fraction of the Sun, N/m^2."""
+        return self.sunlight(t)[1]
+
     def torque_bound(self, t) -> float:
         """``P(t) sum_k A_k |r_k| (1 + rho_s + 2 rho_d / 3)``, N m: no attitude exceeds it."""
         _, p = self.sunlight(t)

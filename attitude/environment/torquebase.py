@@ -97,8 +97,8 @@ def orbital_rate(orbit, t) -> float:
 class EnvironmentTorque(TorqueModel):
     """Base of the environment's torque models: a movable time origin and the rate hooks.
 
-    Subclasses read their paths at ``self.time(t)`` and implement
-    :meth:`torque_bound` (N m, the largest torque magnitude at ``t``).
+    Subclasses read their paths at ``self.time(t)`` and implement :meth:`unit_torque`
+    and :meth:`pressure_at` (the torque is their product for the attitude at hand).
 
     Examples
     --------
@@ -106,7 +106,9 @@ class EnvironmentTorque(TorqueModel):
     ...     velocity_dependent = False
     ...     def evaluate(self, t, quaternion, omega_body, body):
     ...         return np.zeros(np.shape(t) + (3,))
-    ...     def torque_bound(self, t):
+    ...     def unit_torque(self, directions):
+    ...         return np.zeros_like(directions)
+    ...     def pressure_at(self, t):
     ...         return 0.0
     >>> later = Zero().shifted(60.0)
     >>> float(later.time(0.0))
@@ -128,15 +130,36 @@ class EnvironmentTorque(TorqueModel):
         other.time_offset = self.time_offset + float(dt)
         return other
 
-    def torque_bound(self, t) -> float:
-        """Upper bound of the torque magnitude at ``t`` (s), N m, any attitude."""
+    def unit_torque(self, directions: np.ndarray) -> np.ndarray:
+        """Torque per unit pressure (m^3) when the light or the flow comes from
+        ``directions`` (unit, body frame, ``(m, 3)``); subclasses implement this."""
         raise NotImplementedError
+
+    def pressure_at(self, t) -> np.ndarray:
+        """The pressure that multiplies :meth:`unit_torque` at ``t`` (N/m^2)."""
+        raise NotImplementedError
+
+    def largest_torque(self, t) -> float:
+        """The largest torque over all attitudes at ``t``, N m: the pressure times the
+        largest :meth:`unit_torque` over 4000 directions evenly spread on the sphere
+        (a Fibonacci lattice, 3.2 deg apart; computed once)."""
+        if self._largest_unit is None:
+            k = np.arange(4000) + 0.5
+            z = 1.0 - 2.0 * k / 4000
+            phi = np.pi * (3.0 - np.sqrt(5.0)) * k
+            rho = np.sqrt(1.0 - z * z)
+            dirs = np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=-1)
+            self._largest_unit = float(np.max(np.linalg.norm(self.unit_torque(dirs),
+                                                             axis=-1)))
+        return float(np.max(self.pressure_at(t))) * self._largest_unit
+
+    _largest_unit = None
 
     def characteristic_rate(self, t, quaternion, omega_body, body) -> float:
         """Fastest rate the torque drives, rad/s: ``max(sqrt(|M|_max / I_min), n)`` with
-        ``n`` the orbital rate at ``t``."""
-        bound = float(np.max(self.torque_bound(t)))
-        rate = np.sqrt(bound / smallest_moment(body))
+        ``|M|_max`` the :meth:`largest_torque` over attitudes and ``n`` the orbital rate
+        at ``t``."""
+        rate = np.sqrt(self.largest_torque(t) / smallest_moment(body))
         if self.orbit is not None:
             rate = max(rate, orbital_rate(self.orbit, self.time(t)))
         return float(rate)
