@@ -9,7 +9,10 @@ before a propagation calls it at every step.
   ``ppigrf``) along an orbit, inertial components, a drop-in for
   :class:`attitude.torques.TiltedDipoleField`;
 - :class:`SunPath` and :func:`illumination` -- where the Sun is and how much of its disk the
-  Earth hides (cylindrical or conical shadow, with the penumbra).
+  Earth hides (cylindrical or conical shadow, with the penumbra);
+- :class:`SolarRadiationPressure` and :class:`AerodynamicDrag` -- torques of sunlight
+  and of the upper atmosphere on the facets of a body (:class:`Facets`, from the same
+  surface description photometry uses), with :class:`ExponentialAtmosphere`.
 
 The packages ``sgp4`` and ``ppigrf`` come with the ``environment`` extra
 (``pip install "attitude-dynamics[environment]"``).
@@ -17,8 +20,11 @@ The packages ``sgp4`` and ``ppigrf`` come with the ``environment`` extra
 
 from .. import torques as _torques
 from ..errors import OrbitError
+from .drag import VALLADO_EXPONENTIAL_TABLE, AerodynamicDrag, ExponentialAtmosphere
+from .facets import Facets
 from .frames import EARTH_FRAMES, inertial_to_earth_fixed, teme_to_inertial
 from .igrf import IGRF, IGRF_VALIDITY
+from .radiation import ASTRONOMICAL_UNIT, SOLAR_PRESSURE_1AU, SolarRadiationPressure
 from .sun import EARTH_RADIUS, SUN_RADIUS, SunPath, illumination
 from .tabulation import TimeTable
 from .tle import TLEOrbit
@@ -38,6 +44,10 @@ def _igrf_source(orbit, base_epoch, max_degree):
 # scenario files: orbit = { tle = [...] } and field = "igrf" in [[torques]] tables
 _torques.ORBIT_SOURCES["tle"] = _tle_source
 _torques.FIELD_SOURCES["igrf"] = _igrf_source
+# att.torques.SolarRadiationPressure / AerodynamicDrag, as the API names them (the models
+# live here, in the wing; torques cannot import them without a cycle)
+_torques.SolarRadiationPressure = SolarRadiationPressure
+_torques.AerodynamicDrag = AerodynamicDrag
 
 __all__ = [
     "TLEOrbit",
@@ -51,4 +61,11 @@ __all__ = [
     "EARTH_FRAMES",
     "teme_to_inertial",
     "inertial_to_earth_fixed",
+    "Facets",
+    "SolarRadiationPressure",
+    "AerodynamicDrag",
+    "ExponentialAtmosphere",
+    "VALLADO_EXPONENTIAL_TABLE",
+    "SOLAR_PRESSURE_1AU",
+    "ASTRONOMICAL_UNIT",
 ]

@@ -16,6 +16,8 @@ it; it is a path like :class:`attitude.orbit.KeplerOrbit` (``position(t)``, m, i
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from astropy import units as u
 from astropy.coordinates import get_body
@@ -103,6 +105,9 @@ def illumination(r_sat, r_sun, model: str = "conical", *, earth_radius=EARTH_RAD
                          f"{', '.join(SHADOW_MODELS)}", key="shadow")
     r_sat = np.asarray(r_sat, dtype=float)
     r_sun = np.asarray(r_sun, dtype=float)
+    if r_sat.shape == (3,) and r_sun.shape == (3,):   # one epoch: plain floats, 10x faster
+        return np.float64(_illumination_one(r_sat.tolist(), r_sun.tolist(), model,
+                                            earth_radius, sun_radius))
     if model == "cylindrical":
         s_hat = r_sun / np.linalg.norm(r_sun, axis=-1, keepdims=True)
         along = np.sum(r_sat * s_hat, axis=-1)
@@ -124,3 +129,31 @@ def illumination(r_sat, r_sun, model: str = "conical", *, earth_radius=EARTH_RAD
     partial = 1.0 - lens / (np.pi * a * a)
     return np.select([c >= a + b, c <= b - a, c <= a - b],
                      [1.0, 0.0, 1.0 - (b * b) / (a * a)], np.clip(partial, 0.0, 1.0))
+
+
+def _illumination_one(r_sat, r_sun, model, earth_radius, sun_radius) -> float:
+    """:func:`illumination` for one epoch, in floats (the same formulas)."""
+    x, y, z = r_sat
+    if model == "cylindrical":
+        d_sun = math.sqrt(r_sun[0] ** 2 + r_sun[1] ** 2 + r_sun[2] ** 2)
+        along = (x * r_sun[0] + y * r_sun[1] + z * r_sun[2]) / d_sun
+        across2 = max(x * x + y * y + z * z - along * along, 0.0)
+        return 0.0 if (along < 0 and math.sqrt(across2) < earth_radius) else 1.0
+    tx, ty, tz = r_sun[0] - x, r_sun[1] - y, r_sun[2] - z
+    d_sun = math.sqrt(tx * tx + ty * ty + tz * tz)
+    d_earth = math.sqrt(x * x + y * y + z * z)
+    a = math.asin(sun_radius / d_sun)
+    b = math.asin(min(max(earth_radius / d_earth, -1.0), 1.0))
+    cos_c = -(x * tx + y * ty + z * tz) / (d_earth * d_sun)
+    c = math.acos(min(max(cos_c, -1.0), 1.0))
+    if c >= a + b:
+        return 1.0
+    if c <= b - a:
+        return 0.0
+    if c <= a - b:
+        return 1.0 - (b * b) / (a * a)
+    u = (c * c + a * a - b * b) / (2 * c)
+    v = math.sqrt(max(a * a - u * u, 0.0))
+    lens = (a * a * math.acos(min(max(u / a, -1.0), 1.0))
+            + b * b * math.acos(min(max((c - u) / b, -1.0), 1.0)) - c * v)
+    return min(max(1.0 - lens / (math.pi * a * a), 0.0), 1.0)
