@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "cross",
     "multiply",
     "rotate",
     "conjugate",
@@ -205,3 +206,20 @@ def canonical(q) -> np.ndarray:
     # one division by the signed norm (einsum: ~10x faster than linalg.norm on (N, T, 4))
     norm = np.sqrt(np.einsum("...i,...i->...", q, q))[..., None]
     return q / np.where(q[..., 3:] < 0, -norm, norm)
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` along the last axis, broadcasting; plain floats for two 3-vectors
+    (``np.cross`` costs ~30 us a call, too much at every stage of an integrator).
+
+    Examples
+    --------
+    >>> cross(np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    array([0., 0., 1.])
+    """
+    if a.ndim == 1 and b.ndim == 1:
+        a0, a1, a2 = a.tolist()
+        b0, b1, b2 = b.tolist()
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)

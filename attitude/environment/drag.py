@@ -41,10 +41,11 @@ from .. import quaternion as quat
 from ..errors import TorqueConfigError
 from ..orbit import as_path
 from ..quantities import to_si
+from ..quaternion import cross
 from ..torques import EARTH_ROTATION_RATE
 from .facets import Facets, as_facets
 from .sun import EARTH_RADIUS
-from .torquebase import EnvironmentTorque, check_vector, cross
+from .torquebase import EnvironmentTorque, check_vector
 
 __all__ = ["AerodynamicDrag", "ExponentialAtmosphere", "VALLADO_EXPONENTIAL_TABLE"]
 

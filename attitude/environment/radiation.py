@@ -45,9 +45,10 @@ from .. import quaternion as quat
 from ..errors import TorqueConfigError
 from ..orbit import as_path
 from ..quantities import to_si
+from ..quaternion import cross
 from .facets import Facets, as_facets
 from .sun import SHADOW_MODELS, illumination
-from .torquebase import EnvironmentTorque, check_vector, cross
+from .torquebase import EnvironmentTorque, check_vector
 
 __all__ = ["SolarRadiationPressure", "SOLAR_PRESSURE_1AU", "ASTRONOMICAL_UNIT"]
 

@@ -19,7 +19,7 @@ from ..body import RigidBody
 from ..errors import TorqueConfigError
 from ..torques import TorqueModel
 
-__all__ = ["EnvironmentTorque", "smallest_moment", "orbital_rate", "check_vector", "cross"]
+__all__ = ["EnvironmentTorque", "smallest_moment", "orbital_rate", "check_vector"]
 
 
 def smallest_moment(body) -> float:
@@ -40,22 +40,6 @@ def smallest_moment(body) -> float:
     return min(smallest_moment(b) for b in body)
 
 
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a x b`` along the last axis, broadcasting; plain floats for two 3-vectors
-    (``np.cross`` costs ~30 us a call, too much at every stage of an integrator).
-
-    Examples
-    --------
-    >>> cross(np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
-    array([0., 0., 1.])
-    """
-    if a.ndim == 1 and b.ndim == 1:
-        a0, a1, a2 = a.tolist()
-        b0, b1, b2 = b.tolist()
-        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def check_vector(value, key: str) -> np.ndarray:
