@@ -341,20 +341,22 @@ def stack_states(states, n: int | None = None
     if not states or (n is not None and len(states) != n):
         raise InvalidStateError(f"batch: got {n} bodies and {len(states)} states; give one "
                                 "state per body")
+    first = states[0]
+    if not isinstance(first, AttitudeState):
+        raise InvalidStateError(f"states[0]: expected an AttitudeState, got "
+                                f"{type(first).__name__}")
+    epoch, frame = first.epoch, first.frame
+    # one pass: the type, the frame, and each distinct epoch object (the epochs of a batch
+    # are usually one Time object shared by all states; reading a Time's Julian date
+    # costs ~50 us, so each distinct object is compared once, below)
+    distinct: dict[int, int] = {}
     for i, s in enumerate(states):
         if not isinstance(s, AttitudeState):
             raise InvalidStateError(f"states[{i}]: expected an AttitudeState, got "
                                     f"{type(s).__name__}")
-    first = states[0]
-    epoch, frame = first.epoch, first.frame
-    for i, s in enumerate(states):
         if s.frame != frame:
             raise InvalidStateError(f"states[{i}].frame = {s.frame} differs from "
                                     f"states[0].frame = {frame}")
-    # The epochs of a batch are usually one Time object shared by all states: compare
-    # each distinct object once (reading a Time's Julian date costs ~50 us).
-    distinct: dict[int, int] = {}
-    for i, s in enumerate(states):
         if s.epoch is not epoch:
             distinct.setdefault(id(s.epoch), i)
     rows = np.array(list(distinct.values()), dtype=int)
@@ -371,5 +373,5 @@ def stack_states(states, n: int | None = None
         raise InvalidStateError(f"states[{i}].epoch differs from states[0].epoch; a batch "
                                 "shares one epoch")
     quaternion = np.stack([s.attitude.as_quat() for s in states])     # body -> inertial
-    omega = np.stack([s.omega_body for s in states])
+    omega = np.array([s.omega_body for s in states], dtype=float)
     return epoch, frame, quaternion, omega
