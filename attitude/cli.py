@@ -25,6 +25,7 @@ from .ephemeris import Ephemeris, write_atomically
 from .errors import AttitudeError, PropagationError
 from .fitting import fit, sample_posterior
 from .fitting.config import fitted_scenario
+from .fitting.plot import corner_figure, residual_figure
 from .formats.aem import convert
 from .formats.spice import convert_to_ck
 from .photometry.config import run_lightcurve  # photometry (issue 15)
@@ -599,6 +600,15 @@ def _cmd_fit(args) -> int:
                                 n_steps=opts.get("steps", 1000), rng=opts.get("seed"))
         nc = cfg.posterior_netcdf or Path(args.scenario).with_suffix(".posterior.nc")
         written.append(write_atomically(nc, lambda tmp: post.samples.to_netcdf(tmp)))
+    if args.plot:
+        stem = target.with_suffix("")
+        figures = [("residuals", residual_figure(result))]
+        if post is not None:
+            figures.append(("corner", corner_figure(post)))
+        for name, fig in figures:
+            png = Path(f"{stem}_{name}.png")
+            written.append(write_atomically(
+                png, lambda tmp, fig=fig: fig.savefig(tmp, format="png", dpi=120)))
     if not args.quiet:
         print(f"{scenario.name}: {'converged' if result.success else 'NOT CONVERGED'} "
               f"({result.message})")
@@ -737,6 +747,8 @@ def build_parser() -> argparse.ArgumentParser:
                            "SCENARIO_fit.toml)")
     fitp.add_argument("--posterior", action="store_true",
                       help="also sample the posterior (emcee; [observations.posterior])")
+    fitp.add_argument("--plot", action="store_true", help="write the residuals (and, with "
+                      "--posterior, the corner plot) as PNG next to the fitted scenario")
     fitp.add_argument("--quiet", action="store_true", help="print nothing on success")
     fitp.set_defaults(func=_cmd_fit)
     # --- photometry (issue 15) ---

@@ -44,7 +44,7 @@ from .freebody import diagnose_many
 from .quaternion import rotate
 from .statistics import attitude_spread
 
-__all__ = ["polhode", "herpolhode", "body_axes", "euler_angles",
+__all__ = ["agg_figure", "polhode", "herpolhode", "body_axes", "euler_angles",
            "regime_timeline", "ensemble_regimes", "ensemble_spread", "figures",
            "save_figures", "FIGURES", "ENSEMBLE_FIGURES"]
 
@@ -57,8 +57,21 @@ _MAX_POINTS = 4000
 
 
 
-def _pyplot_free_figure(**kw):
-    """A Figure not registered with pyplot (no GUI, no global state): Agg canvas."""
+def agg_figure(**kw):
+    """A matplotlib Figure on an Agg canvas, not registered with pyplot (no GUI, no
+    global state): what every figure of the package is drawn on.
+
+    Raises
+    ------
+    PlotUnavailableError
+        Without matplotlib (the ``plot`` extra).
+
+    Examples
+    --------
+    >>> fig = agg_figure(figsize=(4, 3))
+    >>> type(fig.canvas).__name__
+    'FigureCanvasAgg'
+    """
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: [plot] extra
         from matplotlib.figure import Figure
@@ -129,7 +142,7 @@ def polhode(eph):
     series = _series(eph)
     I, L, E2 = _invariants(series)
     sl = _thin(series.time.size)
-    fig = _pyplot_free_figure(figsize=(11, 5.2))
+    fig = agg_figure(figsize=(11, 5.2))
     t = series.time[sl]
 
     ax = fig.add_subplot(1, 2, 1, projection="3d")
@@ -198,7 +211,7 @@ def herpolhode(eph):
     wi = rotate(series.quaternion, series.omega)
     sl = _thin(series.time.size)
     x, y = wi[sl] @ X, wi[sl] @ Y
-    fig = _pyplot_free_figure(figsize=(6.4, 6.0))
+    fig = agg_figure(figsize=(6.4, 6.0))
     ax = fig.add_subplot(1, 1, 1)
     ax.plot(x, y, color="tab:blue", linewidth=0.8)
     pts = ax.scatter(x, y, c=series.time[sl], cmap="viridis", s=4, zorder=3)
@@ -232,7 +245,7 @@ def body_axes(eph):
     series = _series(eph)
     sl = _thin(series.time.size)
     q = series.quaternion[sl]
-    fig = _pyplot_free_figure(figsize=(6.8, 6.4))
+    fig = agg_figure(figsize=(6.8, 6.4))
     ax = fig.add_subplot(1, 1, 1, projection="3d")
     _wire_ellipsoid(ax, np.ones(3), colour="0.85")
     for j, name in enumerate("ABC"):
@@ -280,7 +293,7 @@ def euler_angles(eph, reference_axis: int | None = None):
     ref = reference_axis or reference_axis_for(I, dyn)
     ang = momentum_frame_angles(series, ref)
     t, unit = _time_axis(series.time)
-    fig = _pyplot_free_figure(figsize=(11, 7), layout="constrained")
+    fig = agg_figure(figsize=(11, 7), layout="constrained")
     axes = fig.subplots(3, 2, sharex=True)
     names = (("precession", r"precession $\phi$"), ("nutation", r"nutation $\theta$"),
              ("rotation", r"rotation $\psi$"))
@@ -322,7 +335,7 @@ def regime_timeline(eph, classification=None):
     I, L, E2 = _invariants(series)
     t, unit = _time_axis(series.time)
     scale = (series.time[-1] / t[-1]) if t.size and t[-1] else 1.0
-    fig = _pyplot_free_figure(figsize=(10, 5), layout="constrained")
+    fig = agg_figure(figsize=(10, 5), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(1, 2.5))
     seen = set()
     for start, stop, regime in classification.segments:
@@ -372,7 +385,7 @@ def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
         spread = spread.compute()
     angle = np.degrees(np.asarray(spread.values, dtype=float))            # (body, time)
     t, unit = _time_axis(eph.time)
-    fig = _pyplot_free_figure(figsize=(10, 4.5), layout="constrained")
+    fig = agg_figure(figsize=(10, 4.5), layout="constrained")
     left, right = fig.subplots(1, 2, width_ratios=(2.2, 1))
     for q, colour in zip(quantiles, ("tab:blue", "tab:orange", "tab:red", "tab:purple")):
         left.plot(t, np.nanquantile(angle, q, axis=0), color=colour, linewidth=1.2,
@@ -417,7 +430,7 @@ def ensemble_regimes(eph):
     w = np.asarray(ds["angular_velocity"].values[:, 0], dtype=float)[ok]
     _, axes = np.linalg.eigh(inertia)                     # principal axes as columns
     d = diagnose_many(moments, np.einsum("nji,nj->ni", axes, w))
-    fig = _pyplot_free_figure(figsize=(10, 4.2), layout="constrained")
+    fig = agg_figure(figsize=(10, 4.2), layout="constrained")
     left, right = fig.subplots(1, 2, width_ratios=(1, 1.6))
     names, counts = np.unique(d["regime"], return_counts=True)
     left.bar(names, counts / max(counts.sum(), 1),

@@ -281,7 +281,8 @@ def test_attitude_fit_cli_end_to_end(tmp_path, capsys):
     from attitude.cli import main
     from attitude.scenario import load_scenario
     out = tmp_path / "fitted.toml"
-    assert main(["fit", "scenarios/tumbler_fit.toml", "-o", str(out)]) == 0
+    assert main(["fit", "scenarios/tumbler_fit.toml", "-o", str(out), "--plot"]) == 0
+    assert (tmp_path / "fitted_residuals.png").stat().st_size > 1000
     text = capsys.readouterr().out
     assert "converged" in text and "regime LAM" in text
     fitted = load_scenario(out)

@@ -21,24 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from attitude.errors import PlotUnavailableError
 from attitude.photometry.lightcurve import Lightcurve
 from attitude.photometry.periods import PeriodFit
+from attitude.plot import agg_figure
 
 __all__ = ["lightcurve_figure", "periodogram_figure", "folded_figure",
            "frequency_map_figure", "save_lightcurve_figures"]
 
 
-def _figure(**kw):
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: plot extra
-        from matplotlib.figure import Figure  # optional: plot extra
-    except ImportError:
-        raise PlotUnavailableError("the figures need matplotlib: pip install "
-                                   "'attitude-dynamics[plot]'") from None
-    fig = Figure(**kw)
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def _hours(t):
@@ -60,7 +50,7 @@ def lightcurve_figure(lc: Lightcurve, fit: PeriodFit | None = None):
     >>> len(fig.axes[0].lines)                          # the data and the model
     2
     """
-    fig = _figure(figsize=(8, 3.5), layout="constrained")
+    fig = agg_figure(figsize=(8, 3.5), layout="constrained")
     ax = fig.add_subplot()
     ax.plot(_hours(lc.time), lc.magnitude, ".", ms=2, label="lightcurve")
     if fit is not None:
@@ -94,7 +84,7 @@ def periodogram_figure(lc: Lightcurve, fit: PeriodFit | None = None):
     dt = np.median(np.diff(t))
     freq, power = LombScargle(t, lc.magnitude).autopower(
         minimum_frequency=1 / span, maximum_frequency=0.5 / dt, samples_per_peak=10)
-    fig = _figure(figsize=(8, 3.5), layout="constrained")
+    fig = agg_figure(figsize=(8, 3.5), layout="constrained")
     ax = fig.add_subplot()
     ax.plot(freq * 86400, power, lw=0.8)
     if fit is not None:
@@ -121,7 +111,7 @@ def folded_figure(lc: Lightcurve, fit: PeriodFit):
     'phase (P = 12.0000 h)'
     """
     period = fit.lightcurve_period
-    fig = _figure(figsize=(6, 3.5), layout="constrained")
+    fig = agg_figure(figsize=(6, 3.5), layout="constrained")
     ax = fig.add_subplot()
     phase = np.mod(lc.time, period) / period
     ax.scatter(phase, lc.magnitude, s=2, c=lc.time, cmap="viridis")
@@ -145,7 +135,7 @@ def frequency_map_figure(fit: PeriodFit):
     >>> frequency_map_figure(fit).axes[0].get_xlabel()
     'j (f1 = 1/12.0000 h)'
     """
-    fig = _figure(figsize=(5, 4), layout="constrained")
+    fig = agg_figure(figsize=(5, 4), layout="constrained")
     ax = fig.add_subplot()
     j = np.array([t["j"] for t in fit.terms])
     k = np.array([t["k"] for t in fit.terms])

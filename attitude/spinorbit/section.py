@@ -33,8 +33,9 @@ import numpy as np
 import xarray as xr
 
 from ..ephemeris import write_atomically
-from ..errors import PlotUnavailableError, SpinOrbitError
+from ..errors import SpinOrbitError
 from ..orbit import KeplerOrbit
+from ..plot import agg_figure
 from ..quantities import to_si
 from ..torques import GravityGradient, SumTorque
 from .libration import long_axis_angle, measure_libration
@@ -503,15 +504,7 @@ def section_figure(section: xr.Dataset, *, title: str | None = None, centres=())
     >>> fig.axes[0].get_title()
     'Hyperion'
     """
-    try:
-        # matplotlib is optional (the plot extra): imported when a figure is asked for
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: plot extra
-        from matplotlib.figure import Figure  # optional: plot extra
-    except ImportError:
-        raise PlotUnavailableError("the section figure needs matplotlib: pip install "
-                                   "'attitude-dynamics[plot]'") from None
-    fig = Figure(figsize=(7.0, 6.0), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = agg_figure(figsize=(7.0, 6.0), layout="constrained")
     ax = fig.add_subplot()
     ang = np.degrees(section["angle"].values)
     rate = section["rate"].values
