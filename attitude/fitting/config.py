@@ -25,9 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from astropy import units as u
 from astropy.time import Time
 
-from ..errors import ScenarioError
+from ..errors import AttitudeError, ScenarioError
 from ..regimes import PERIOD_KEYS
 from ..spec import Key, Table
 from ..state import format_epoch
@@ -89,7 +90,7 @@ class ObservationsConfig:
     posterior_netcdf: Path | None
 
 
-def _csv(folder: Path, spec: dict, where: str, columns: tuple, epoch: Time, path):
+def _csv(folder: Path, spec: dict, where: str, columns: tuple, path):
     file = folder / spec["file"]
     try:
         data = np.genfromtxt(file, delimiter=",", names=True, dtype=None, encoding="utf-8")
@@ -115,8 +116,7 @@ def _csv(folder: Path, spec: dict, where: str, columns: tuple, epoch: Time, path
     return times, values
 
 
-def parse_observations(table: dict, folder: Path, scenario_path: Path,
-                       epoch: Time) -> ObservationsConfig:
+def parse_observations(table: dict, folder: Path, scenario_path: Path) -> ObservationsConfig:
     """Observation objects from a validated ``[observations]`` table.
 
     Raises
@@ -128,13 +128,12 @@ def parse_observations(table: dict, folder: Path, scenario_path: Path,
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from astropy.time import Time
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> _ = (folder / "q.csv").write_text("t,qx,qy,qz,qw" + chr(10) + "0,0,0,0,1" + chr(10)
     ...                                   + "1,0,0,0.0998,0.9950" + chr(10))
     >>> table = {"attitude": {"file": "q.csv", "sigma": 1e-3},
     ...          "periods": {"polhode": {"value": 27.38, "sigma": 0.07, "unit": "h"}}}
-    >>> cfg = parse_observations(table, folder, folder / "fit.toml", Time("2029-04-13"))
+    >>> cfg = parse_observations(table, folder, folder / "fit.toml")
     >>> [type(o).__name__ for o in cfg.observations]
     ['AttitudeObservations', 'PeriodObservations']
     >>> cfg.observations[0].times.tolist(), cfg.output.name
@@ -145,23 +144,22 @@ def parse_observations(table: dict, folder: Path, scenario_path: Path,
     try:
         if "attitude" in table:
             t, q = _csv(folder, table["attitude"], "observations.attitude",
-                        ("qx", "qy", "qz", "qw"), epoch, path)
+                        ("qx", "qy", "qz", "qw"), path)
             obs.append(AttitudeObservations(t, q, table["attitude"]["sigma"]))
         if "rates" in table:
             t, w = _csv(folder, table["rates"], "observations.rates", ("wx", "wy", "wz"),
-                        epoch, path)
+                        path)
             obs.append(AngularVelocityObservations(t, w, table["rates"]["sigma"]))
         if table.get("periods"):
-            pairs = {k: (f"{v['value']} {v.get('unit', 's')}", f"{v['sigma']} "
-                         f"{v.get('unit', 's')}") for k, v in table["periods"].items()}
+            pairs = {k: (v["value"] * u.Unit(v.get("unit", "s")),
+                         v["sigma"] * u.Unit(v.get("unit", "s")))
+                     for k, v in table["periods"].items()}
             obs.append(PeriodObservations(**pairs))
     except ScenarioError:
         raise
-    except Exception as exc:  # the observation objects raise keyed AttitudeErrors
-        key = getattr(exc, "key", None)
-        raise ScenarioError(getattr(exc, "reason", str(exc)),
-                            key=f"observations.{key}" if key else "observations",
-                            path=path) from None
+    except AttitudeError as exc:  # the observation objects' keyed errors, under the table
+        raise ScenarioError(exc.reason, key=f"observations.{exc.key}" if exc.key
+                            else "observations", path=path) from None
     if not obs:
         raise ScenarioError("give attitude, rates or periods", key="observations",
                             path=path)

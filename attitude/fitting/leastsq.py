@@ -96,6 +96,7 @@ class Objective:
     free: tuple
     times: np.ndarray = field(init=False, repr=False)
     slices: tuple = field(init=False, repr=False)
+    needs_periods: bool = field(init=False, repr=False)
 
     def __post_init__(self):
         spans, t_all, start = [], [], 0
@@ -110,6 +111,10 @@ class Objective:
             start += t.size
         object.__setattr__(self, "times", np.concatenate(t_all) if t_all else np.zeros(0))
         object.__setattr__(self, "slices", tuple(spans))
+        # period observations have residuals but no epochs: the model's periods are
+        # computed only when one is present
+        object.__setattr__(self, "needs_periods", any(
+            o.n_residuals and not np.size(o.times) for o in self.observations))
 
     def full(self, x: np.ndarray) -> np.ndarray:
         """Free values (N, k) -> full parameter vectors (N, 8)."""
@@ -135,13 +140,11 @@ class Objective:
     def residuals(self, x: np.ndarray) -> np.ndarray:
         """(N, m) normalised residuals, the last column the domain penalty."""
         v, distance = project(self.full(x))
-        need_periods = any(o.n_residuals and not np.size(o.times)
-                           for o in self.observations)
         if self.times.size:
             q, w = self.model.evaluate(v, self.times)
         else:
             q = w = np.zeros((v.shape[0], 0, 4))
-        periods = self.model.periods(v) if need_periods else {}
+        periods = self.model.periods(v) if self.needs_periods else {}
         parts = [obs.residuals(q[:, s], w[:, s], periods)
                  for obs, s in zip(self.observations, self.slices)]
         parts.append(PENALTY * distance[:, None])
