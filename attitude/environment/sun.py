@@ -25,7 +25,7 @@ from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 
 from ..errors import OrbitError
-from .frames import check_frame, teme_to_inertial
+from .frames import check_frame, gcrf_to_frame
 from .tabulation import TimeTable
 
 __all__ = ["SunPath", "illumination", "EARTH_RADIUS", "SUN_RADIUS", "SHADOW_MODELS"]
@@ -68,11 +68,8 @@ class SunPath:
         times = self.epoch + TimeDelta(t, format="sec")
         with iers.conf.set_temp("auto_download", False):
             xyz = get_body("sun", times).cartesian.xyz.to_value(u.m).T
-        if self.frame != "GCRF" and self.frame != "ICRF":
-            # GCRF -> TEME -> frame, through the TEME rotation's transpose
-            to_teme = np.swapaxes(teme_to_inertial(times, "GCRF"), -1, -2)
-            xyz = np.einsum("nij,nj->ni", teme_to_inertial(times, self.frame) @ to_teme,
-                            xyz)
+        if self.frame not in ("GCRF", "ICRF"):
+            xyz = np.einsum("nij,nj->ni", gcrf_to_frame(self.frame, times), xyz)
         return xyz
 
     def position(self, t) -> np.ndarray:

@@ -146,7 +146,7 @@ class LommelSeeliger(ScatteringLaw):
         return 0.25 * self.albedo
 
     def kernel(self, mu0, mu, cos_alpha):
-        return LommelSeeligerLambert(c=0.0).kernel(mu0, mu, cos_alpha)
+        return _LOMMEL_SEELIGER_KERNEL.kernel(mu0, mu, cos_alpha)
 
 
 @dataclass(frozen=True)
@@ -189,6 +189,10 @@ class LommelSeeligerLambert(ScatteringLaw):
             ls += prod
         return ls
 
+
+
+#: The Lommel-Seeliger kernel: LS + c Lambert with c = 0, built once (not per call).
+_LOMMEL_SEELIGER_KERNEL = LommelSeeligerLambert(c=0.0)
 
 def chandrasekhar_h(x, w):
     """Hapke's (2002) approximation of Chandrasekhar's H function, isotropic scatterers.
