@@ -420,7 +420,8 @@ def _splitting_blocks(bodies, states, times, block: int, torques, step, order):
                 f"times: a stream with torques runs forward from the state's epoch; the "
                 f"first time is {t[0]!r} s (give times >= 0)", key="times")
         qs, ws = integrate_splitting(bodies, q[0] if single else q, w[0] if single else w,
-                                     t, torques=torques, step=step, order=order, t0=t_last)
+                                     t, torques=torques, step=step, order=order, t0=t_last,
+                                     dense=False)
         if t.size:
             q, w, t_last = qs[..., -1, :], ws[..., -1, :], float(t[-1])
             if single:

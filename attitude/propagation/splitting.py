@@ -80,7 +80,7 @@ from .. import freebody as fb
 from .. import quaternion as quat
 from ..body import RigidBody, as_bodies, to_body_frame, to_principal_frame
 from ..deprecation import moved_attribute
-from ..errors import InvalidStateError
+from ..errors import InvalidStateError, PropagationError
 from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
 from ..torques import as_torque_model
 
@@ -469,22 +469,6 @@ def _merge(ops) -> list:
     return out
 
 
-def _segment_ops(ops: tuple, n: int):
-    """The ops of ``n`` consecutive steps, adjacent ops of one kind merged (the last
-    kick of a step and the first of the next act at the same time and attitude)."""
-    ops = _merge(ops)
-    if len(ops) > 1 and ops[0][0] == ops[-1][0]:
-        first, middle, last = ops[0], ops[1:-1], ops[-1]
-        joint = (first[0], first[1] + last[1])
-        yield first
-        for k in range(n):
-            yield from middle
-            yield joint if k < n - 1 else last
-    else:
-        for _ in range(n):
-            yield from ops
-
-
 def _resolve_scheme(order, scheme, attitude_only: bool = False) -> tuple[str, int, tuple]:
     if scheme is None and order is None:
         order = 4
@@ -805,11 +789,12 @@ def _choose_step(system, q_p, w_p, order, steps_per_period, t0: float = 0.0) -> 
 # progress
 # ===========================================================================
 class _Progress:
-    """``tqdm`` when installed, else a one-line stderr counter (at most every 0.5 s)."""
+    """``tqdm`` when installed, else a one-line stderr counter (at most every 0.5 s);
+    counts simulated seconds."""
 
-    def __init__(self, total: int, enabled: bool):
-        self.total = max(int(total), 1)
-        self.done = 0
+    def __init__(self, total: float, enabled: bool):
+        self.total = max(float(total), 1e-300)
+        self.done = 0.0
         self.bar = None
         self.enabled = enabled
         self.t0 = self.last = _time.monotonic()
@@ -819,21 +804,22 @@ class _Progress:
             from tqdm.auto import tqdm  # optional (a progress bar when installed)
         except ImportError:
             return
-        self.bar = tqdm(total=self.total, unit="step", desc="splitting", leave=False)
+        self.bar = tqdm(total=self.total, unit="s", unit_scale=True, desc="splitting",
+                        leave=False)
 
-    def update(self, n: int) -> None:
+    def update(self, dt: float) -> None:
         if not self.enabled:
             return
-        self.done += n
+        self.done += dt
         if self.bar is not None:
-            self.bar.update(n)
+            self.bar.update(dt)
             return
         now = _time.monotonic()
-        if now - self.last >= 0.5 or self.done >= self.total:
+        if now - self.last >= 0.5 or self.done >= self.total * (1 - 1e-12):
             self.last = now
-            pct = 100.0 * self.done / self.total
-            sys.stderr.write(f"\rsplitting: {pct:5.1f}% ({self.done}/{self.total} steps, "
-                             f"{now - self.t0:.1f} s)")
+            pct = 100.0 * min(self.done / self.total, 1.0)
+            sys.stderr.write(f"\rsplitting: {pct:5.1f}% ({self.done:.6g} of {self.total:.6g}"
+                             f" s simulated, {now - self.t0:.1f} s)")
             sys.stderr.flush()
 
     def close(self) -> None:
@@ -841,7 +827,7 @@ class _Progress:
             return
         if self.bar is not None:
             self.bar.close()
-        elif self.done:
+        else:
             sys.stderr.write("\n")
             sys.stderr.flush()
 
@@ -1022,14 +1008,6 @@ def _segments(t: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def _n_free(ops: tuple, steps: int) -> int:
-    """Number of free flows in ``steps`` merged steps (the progress unit)."""
-    merged = _merge(ops)
-    per = sum(1 for kind, _ in merged if kind == "F")
-    joint = len(merged) > 1 and merged[0][0] == merged[-1][0] == "F"
-    return steps * per - (steps - 1 if joint and steps else 0)
-
-
 def step_count(dt: float, h_max: float) -> int:
     """Number of equal steps no longer than ``h_max`` that cover ``dt``.
 
@@ -1045,10 +1023,193 @@ def step_count(dt: float, h_max: float) -> int:
     return max(1, math.ceil(abs(dt) / h_max * (1.0 - 1e-12)))
 
 
+#: Embedded composition of each scheme for the error estimate of ``rtol=`` (see
+#: :func:`integrate_splitting`): a cheaper scheme of the same or lower order whose
+#: difference from the step estimates the local error.
+EMBEDDED = {"strang": "lie", "yoshida4": "strang", "blanes-moan": "yoshida4",
+            "blanes-moan-rkn": "yoshida4", "yoshida6": "blanes-moan"}
+_LIE = (1, (("K", 1.0), ("F", 1.0), ("K", 0.0)))      # Lie-Trotter, order 1
+#: Relative distance of an output time to a step boundary below which the step is
+#: stretched to end on the output (a change of the step at the level of its rounding).
+SNAP = 1e-9
+
+
+class _Scheme:
+    """A symmetric composition as kick coefficients ``b[0..m]`` and free-flow
+    coefficients ``a[0..m-1]``: ``K(b0 h) F(a0 h) K(b1 h) ... F(a_{m-1} h) K(b_m h)``."""
+
+    def __init__(self, order: int, ops):
+        merged = _merge(ops)
+        if merged[0][0] != "K":
+            merged = [("K", 0.0)] + merged
+        if merged[-1][0] != "K":
+            merged = merged + [("K", 0.0)]
+        self.order = order
+        self.b = tuple(c for kind, c in merged if kind == "K")
+        self.a = tuple(c for kind, c in merged if kind == "F")
+
+
+class _Stepper:
+    """One composition step of the splitting over ``h``, and the state between steps.
+
+    The loop keeps the state just after the last free flow, ``(q, w)`` at time ``t``,
+    and the *pending* kick ``tau`` that closes the step (the last kick of a step and
+    the first of the next act at the same time and attitude, so they merge).  The state
+    at the step boundary, needed only for outputs and the error estimate, is that state
+    with the pending kick applied (:meth:`boundary`).
+    """
+
+    def __init__(self, ops, scheme: _Scheme, has_kick, has_drag, has_internal, rk_order,
+                 anchor):
+        self.ops = ops
+        self.scheme = scheme
+        self.has_kick, self.has_drag = has_kick, has_drag
+        self.has_internal = has_internal
+        self.rk_order = rk_order
+        self.anchor = anchor
+        self.free_flows = 0
+
+    def kick(self, t, q, w, tau, cached):
+        if tau == 0.0:
+            return q, w, cached
+        if self.has_internal:
+            q, w = self.ops.internal(t, q, w, tau, self.rk_order, self.anchor)
+            return q, w, None
+        w, cached = _kick(self.ops, t, q, w, tau, cached, self.has_kick, self.has_drag,
+                          self.rk_order)
+        return q, w, cached
+
+    def boundary(self, t, q, w, pending, cached):
+        """The state at the step boundary ``t``: the pending kick applied."""
+        q, w, cached = self.kick(t, q, w, pending, cached)
+        return q, w, cached
+
+    def step(self, t, q, w, pending, h, cached, scheme: _Scheme | None = None):
+        """One step of ``scheme`` (default the run's) over ``h`` from the state after the
+        last free flow with its pending kick: ``(q, w, new pending)`` at ``t + h``."""
+        scheme = self.scheme if scheme is None else scheme
+        acc = 0.0
+        b, a = scheme.b, scheme.a
+        for i in range(len(a)):
+            q, w, cached = self.kick(t + acc * h, q, w, (pending if i == 0 else 0.0)
+                                     + b[i] * h, cached)
+            q, w = self.ops.free(q, w, a[i] * h)
+            self.free_flows += 1
+            cached = None
+            acc += a[i]
+        return q, w, b[-1] * h
+
+
+def _rtol_error(w0, q_hi, w_hi, q_lo, w_lo, rtol, w_floor) -> float:
+    """Error of a trial step relative to ``rtol``: the larger of ``|dq|`` (the
+    quaternion has norm 1) and ``|dw| / max(|w|, |w'|, w_floor)``, over the bodies."""
+    dq = np.asarray(q_hi, dtype=float) - np.asarray(q_lo, dtype=float)
+    dw = np.asarray(w_hi, dtype=float) - np.asarray(w_lo, dtype=float)
+    w0 = np.asarray(w0, dtype=float)
+    w1 = np.asarray(w_hi, dtype=float)
+    scale = np.maximum(np.maximum(np.sqrt(np.sum(w0 * w0, axis=-1)),
+                                  np.sqrt(np.sum(w1 * w1, axis=-1))), w_floor)
+    err = np.maximum(np.sqrt(np.sum(dq * dq, axis=-1)),
+                     np.sqrt(np.sum(dw * dw, axis=-1)) / scale)
+    return float(np.max(err)) / rtol
+
+
+def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: str,
+           rtol: float | None = None, embedded: _Scheme | None = None,
+           w_floor: float = 0.0, h_limit: float = math.inf, bar=None) -> None:
+    """Advance one direction of a run and hand every output to ``store(j, q, w)``.
+
+    ``times``: ``(index, time relative to t0)`` pairs in order of increasing ``|time|``,
+    all of one sign.  Modes: ``"dense"`` (steps of ``h`` from ``t0``, outputs inside a
+    step by a partial step from its start), ``"cut"`` (each interval between outputs
+    cut into equal steps no longer than ``h``) and ``"rtol"`` (steps chosen by the
+    error estimate, outputs as in ``"dense"``).
+    """
+    if not times:
+        return
+    sign = 1.0 if times[-1][1] >= 0 else -1.0
+    pending, cached, t_now, k = 0.0, None, 0.0, 0
+    tol = SNAP * (abs(h) if math.isfinite(h) else abs(times[-1][1]))
+    j = 0
+    expo = 0.0
+    if mode == "rtol":
+        low = min(stepper.scheme.order, embedded.order)
+        expo = 1.0 / (low + 1.0) if embedded.order != stepper.scheme.order else 0.2
+    while j < len(times):
+        idx, tj = times[j]
+        if abs(tj - t_now) <= tol or tj == t_now:
+            qb, wb, cached = stepper.boundary(t0 + t_now, q, w, pending, cached)
+            store(idx, qb, wb)
+            j += 1
+            continue
+        if mode == "cut":
+            n = step_count(tj - t_now, h)
+            hh = (tj - t_now) / n
+            for i in range(n):
+                q, w, pending = stepper.step(t0 + t_now + i * hh, q, w, pending, hh, cached)
+                cached = None
+            if bar is not None:
+                bar.update(abs(tj - t_now))
+            t_now = tj
+            continue
+        if mode == "dense":
+            t_next = sign * (k + 1) * h if math.isfinite(h) else times[-1][1]
+            if abs(t_next - times[-1][1]) <= tol:
+                t_next = times[-1][1]
+        else:                                            # rtol: a trial step
+            hh = sign * min(h, h_limit)
+            t_next = t_now + hh
+            last = times[-1][1]
+            if sign * (t_next - last) > -tol:             # do not step past the last output
+                t_next = last
+            while True:
+                hh = t_next - t_now
+                q_pre, w_pre, pend_new = stepper.step(t0 + t_now, q, w, pending, hh, cached)
+                q_hi, w_hi, c_hi = stepper.boundary(t0 + t_next, q_pre, w_pre, pend_new, None)
+                q_b, w_b, cached = stepper.boundary(t0 + t_now, q, w, pending, cached)
+                ql, wl, pl = stepper.step(t0 + t_now, q_b, w_b, 0.0, hh, cached, embedded)
+                q_lo, w_lo, _ = stepper.boundary(t0 + t_next, ql, wl, pl, None)
+                err = _rtol_error(w_b, q_hi, w_hi, q_lo, w_lo, rtol, w_floor)
+                if err <= 1.0:
+                    break
+                factor = max(0.2, 0.9 * err ** -expo) if math.isfinite(err) else 0.2
+                h = abs(hh) * factor
+                if h <= 1e-12 * max(abs(t_now), abs(hh)):
+                    raise PropagationError(f"splitting with rtol={rtol:g}: the step fell "
+                                           f"below round-off at t = {t0 + t_now:.9g} s; "
+                                           "loosen rtol or use method='integrator'",
+                                           key="rtol")
+                t_next = t_now + sign * h
+            grow = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err ** -expo))
+            h = abs(hh) * grow
+        # outputs strictly inside (t_now, t_next): partial steps from the step's start
+        while j < len(times) and sign * (times[j][1] - t_next) < -tol:
+            idx, tj = times[j]
+            if abs(tj - t_now) <= tol:
+                qb, wb, cached = stepper.boundary(t0 + t_now, q, w, pending, cached)
+            else:
+                qp, wp, pp = stepper.step(t0 + t_now, q, w, pending, tj - t_now, cached)
+                qb, wb, _ = stepper.boundary(t0 + tj, qp, wp, pp, None)
+            store(idx, qb, wb)
+            j += 1
+        if j == len(times):
+            break
+        if mode == "rtol":
+            q, w, pending, cached = q_pre, w_pre, pend_new, c_hi
+        else:
+            q, w, pending = stepper.step(t0 + t_now, q, w, pending, t_next - t_now, cached)
+            cached = None
+            k += 1
+        if bar is not None:
+            bar.update(abs(t_next - t_now))
+        t_now = t_next
+
+
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
                         order: int | None = None, scheme: str | None = None,
                         progress: bool = False, steps_per_period: float | None = None,
-                        t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                        t0: float = 0.0, rtol: float | None = None,
+                        dense: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Propagate rigid bodies under torques with a splitting method.
 
     The exact free rigid-body flow alternates with torque kicks (see the module
@@ -1065,9 +1226,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         Body-frame rates at ``t = 0``, rad/s.
     t : (T,) array
         Output times, s since the epoch, any order, may be negative (integrated
-        backwards from 0).  Each interval between consecutive outputs is cut into an
-        integer number of equal steps no longer than ``step``, so every output time is
-        hit exactly.
+        backwards from 0).
     torques : sequence of torque models (or one model)
         ``torque(t, quaternion, omega_body, body) -> body-frame N m``
         (:mod:`attitude.torques`).  Models with ``velocity_dependent = False`` are
@@ -1076,7 +1235,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         :class:`attitude.body.BodyBatch`; for one body with ``(4,)``, ``(3,)`` and the
         :class:`~attitude.body.RigidBody` (like the reference integrator).
     step : float, optional
-        Longest step, s.  Default: :func:`choose_step`.
+        Step, s (with ``rtol``: the longest step).  Default: :func:`choose_step`.
     order : {2, 4, 6}, optional
         Order of the composition (default 4, or that of ``scheme``; if both are given
         they must agree).
@@ -1089,6 +1248,21 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     t0 : float
         Time of ``quat0`` / ``omega0``, s since the epoch (default 0); ``t`` stays in
         seconds since the epoch (used to restart from an intermediate state).
+    rtol : float, optional
+        Error control: each step is accepted when the estimated local error is at most
+        ``rtol`` (relative to the unit quaternion and to ``|omega|``), the estimate
+        being the difference from a cheaper composition on the same step
+        (:data:`EMBEDDED`: Yoshida's triple jump for the order-4 schemes), and the next
+        step follows the usual controller ``h (1/err)^(1/(p+1))`` (factor 0.9, between
+        0.2 and 5).  Like DOP853's ``rtol``, it bounds the local error estimate per
+        step; the propagated solution is the more accurate one.  Variable steps are
+        not symplectic: for long conservative runs prefer the fixed default step.
+    dense : bool
+        Outputs do not set the steps (default): the steps run on the grid
+        ``t0 + k h`` and an output inside a step is one partial step of the same
+        composition from the step's start (its error is that of one step).  With
+        ``False`` each interval between outputs is cut into equal steps no longer than
+        ``step`` (every output then lies on a step boundary).
 
     Returns
     -------
@@ -1137,70 +1311,66 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     t = np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1 or not np.all(np.isfinite(t)):
         raise InvalidStateError("t: expected a 1-D array of finite times (s)")
+    if rtol is not None and not (isinstance(rtol, (int, float, np.floating))
+                                 and 0.0 < float(rtol) < 1.0):
+        raise InvalidStateError(f"rtol: expected a number in (0, 1), got {rtol!r}",
+                                key="rtol")
     t0 = float(t0)
     t = t - t0
     q_p0, w_p0 = system.to_principal(q0, w0)
 
     if step is None:
-        h_max = _choose_step(system, q_p0, w_p0, sorder, steps_per_period, t0)
+        h_max = h_rule = _choose_step(system, q_p0, w_p0, sorder, steps_per_period, t0)
     else:
         h_max = float(step)
         if not (h_max > 0 and math.isfinite(h_max)):
             raise InvalidStateError(f"step: expected a positive number of seconds, got "
                                     f"{step!r}")
+        h_rule = h_max
     has_kick = bool(system.kick_terms)
     has_drag = bool(system.drag_terms)
     has_internal = bool(system.internal_terms)
+    run_scheme = _Scheme(sorder, ops_step)
+    mode = "dense" if dense else "cut"
     if not (has_kick or has_drag or has_internal):
-        ops_step = (("F", 1.0),)            # no torque: the free flow alone is exact
+        run_scheme = _Scheme(sorder, (("F", 1.0),))   # no torque: the free flow is exact
+        h_max, mode = math.inf, "dense"
+    elif rtol is not None:
+        mode = "rtol"
     rk_order = 2 if sorder == 2 else 4
+    embedded = None
+    if mode == "rtol":
+        emb = EMBEDDED[name]
+        if emb == "blanes-moan" and attitude_only:
+            emb = "blanes-moan-rkn"
+        embedded = _Scheme(*_LIE) if emb == "lie" else _Scheme(*SCHEMES[emb])
 
     out_q = np.empty((n, t.size, 4))
     out_w = np.empty((n, t.size, 3))
-    plan = []
-    total = 0
-    for idx in _segments(t):
-        prev, counts = 0.0, []
-        for j in idx:
-            counts.append(step_count(t[j] - prev, h_max))
-            prev = t[j]
-        plan.append((idx, counts))
-        total += sum(_n_free(ops_step, c) for c in counts)
     ops = _One(system) if n == 1 else _Batch(system)
     # internal torques alone keep the inertial L: every kick restores the initial one
     anchor = (quat.rotate(q_p0, w_p0 * system.moments)
               if has_internal and not (has_kick or has_drag) else None)
-    bar = _Progress(total, progress)
+    stepper = _Stepper(ops, run_scheme, has_kick, has_drag, has_internal, rk_order, anchor)
+    spin0 = float(np.max(np.sqrt(np.sum(w_p0 * w_p0, axis=1))))
+    w_floor = 1e-3 * max(spin0, 1.0 / h_rule if math.isfinite(h_rule) else 0.0)
+    w_floor = w_floor if w_floor > 0 else np.finfo(float).tiny
+    segments = _segments(t)
+    bar = _Progress(sum(float(np.max(np.abs(t[idx]))) for idx in segments), progress)
+
+    def store(j, q, w):
+        ops.store(out_q, out_w, j, q, w)
+
     try:
-        for idx, counts in plan:
+        for idx in segments:
             if n == 1:
                 q, w = tuple(q_p0[0].tolist()), tuple(w_p0[0].tolist())
             else:
                 q, w = q_p0.copy(), w_p0.copy()
-            t_now = 0.0
-            cached = None          # attitude-only acceleration at the current (t, q)
-            for j, steps in zip(idx, counts):
-                if steps:
-                    h = (t[j] - t_now) / steps
-                    acc = 0.0
-                    nf = 0
-                    for kind, cc in _segment_ops(ops_step, steps):
-                        if kind == "F":
-                            q, w = ops.free(q, w, cc * h)
-                            acc += cc
-                            cached = None
-                            nf += 1
-                            if nf & 1023 == 0:
-                                bar.update(1024)
-                        elif has_internal:
-                            q, w = ops.internal(t0 + t_now + acc * h, q, w, cc * h, rk_order,
-                                                anchor)
-                        else:
-                            w, cached = _kick(ops, t0 + t_now + acc * h, q, w, cc * h, cached,
-                                              has_kick, has_drag, rk_order)
-                    bar.update(nf & 1023)
-                    t_now = t[j]
-                ops.store(out_q, out_w, j, q, w)
+            h = h_max if mode != "rtol" else min(h_rule, h_max)
+            _march(stepper, q, w, t0, [(int(j), float(t[j])) for j in idx], store, h,
+                   mode=mode, rtol=rtol, embedded=embedded, w_floor=w_floor,
+                   h_limit=h_max, bar=bar)
     finally:
         bar.close()
     if system.identity:
