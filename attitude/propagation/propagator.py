@@ -108,13 +108,17 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         time).  Default: ``"exact"`` without torques; with torques ``"splitting"``,
         or ``"integrator"`` if ``rtol`` is given.
     rtol : float, optional
-        Relative tolerance of the ``"integrator"`` method (default 1e-13).
+        Relative tolerance: of the ``"integrator"`` method (default 1e-13), or, with
+        ``method="splitting"``, the error control of the splitting (each step's
+        estimated local error at most ``rtol`` relative to the unit quaternion and to
+        ``|omega|``, like DOP853's; ``step`` is then the longest step).
     step : float (s) or time Quantity, optional
         Longest step of the ``"splitting"`` method; default
         :func:`attitude.propagation.splitting.choose_step` (a fixed fraction of the
         torques' time scales: libration, orbit, damping, and how fast each torque changes
-        along the free motion; not the spin, which the exact free flow carries).  Output
-        times are always hit exactly.
+        along the free motion; not the spin, which the exact free flow carries).  The
+        output times do not set the steps: an output inside a step is a partial step of
+        the same composition from the step's start.
     order : {2, 4, 6}, optional
         Order of the ``"splitting"`` method (default 4).
     progress : bool
@@ -144,8 +148,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         chunk.  A single body (not a sequence) runs in this process: ``client`` and
         ``chunks`` are for batches.
 
-    ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol``
-    only by ``"integrator"``; the exact solution ignores them.  An ensemble, or a batch
+    ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol`` by
+    ``"integrator"`` and ``"splitting"``; the exact solution ignores them.  An ensemble, or a batch
     with ``client``/``chunks``, has a ``status`` variable per body (0 ok, 1 invalid
     input, 2 propagation failed; such bodies are NaN and do not stop the others).
 
@@ -201,7 +205,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         q, w = _exact(bodies, q0, w0, t)
     elif method == "splitting":
         q, w = integrate_splitting(bodies, q0, w0, t, torques=torques, step=step,
-                                   order=4 if order is None else order, progress=progress)
+                                   order=4 if order is None else order, progress=progress,
+                                   rtol=rtol)
     else:
         kwargs = {} if rtol is None else {"rtol": rtol}
         q, w = integrate_reference_batch(bodies, q0, w0, t, torques=torques, **kwargs)
@@ -247,7 +252,8 @@ def _propagate_ensemble(ensemble, times, *, torques, method, rtol, step, order, 
     if method == "splitting":
         options = {"step": None if step is None else _step_seconds(step),
                    "order": 4 if order is None else order,
-                   "progress": progress and client is None and chunks is None}
+                   "progress": progress and client is None and chunks is None,
+                   "rtol": rtol}
     elif method == "integrator" and rtol is not None:
         options = {"rtol": rtol}
     return propagate_ensemble(ensemble, t, method=method, torques=torques, options=options,
@@ -319,6 +325,10 @@ def _with_events(method, bodies, q0, w0, t, events, torques, step, order, rtol, 
                 qx, wx = _exact([bodies[i]], q0[i:i + 1], w0[i:i + 1], np.array([x]))
                 return qx[0, 0], wx[0, 0]
         else:
+            if rtol is not None:
+                raise InvalidStateError("events with method='splitting' run on a fixed step "
+                                        "grid: give step= (or nothing), not rtol=",
+                                        key="rtol")
             order = 4 if order is None else order
             h = step if step is not None else choose_step(bodies, q0, w0, torques,
                                                           order=order)
@@ -355,7 +365,7 @@ def _splitting_events(bodies, q0, w0, t, grid, events, torques, hs, order, progr
         seg = grid[start:end + 1]
         qs, ws = integrate_splitting(bodies, qg[:, start], wg[:, start], seg[1:],
                                      torques=torques, step=hs, order=order,
-                                     progress=progress, t0=seg[0])
+                                     progress=progress, t0=seg[0], dense=False)
         qg[:, start + 1:end + 1], wg[:, start + 1:end + 1] = qs, ws
 
         def state_at(i, k, x, seg=seg, start=start):

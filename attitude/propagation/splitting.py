@@ -83,6 +83,8 @@ from ..deprecation import moved_attribute
 from ..errors import InvalidStateError, PropagationError
 from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
 from ..torques import as_torque_model
+from . import compiled_loop
+from .compiled_torques import compile_torques
 
 __all__ = [
     "integrate_splitting",
@@ -1205,11 +1207,73 @@ def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: 
         t_now = t_next
 
 
+def _compiled_specs(system: _System, body_list, t0: float, t: np.ndarray, supported: bool):
+    """Per body, the compiled forms of the kick, drag and internal torques, or ``None``
+    if a model has none (or internal torques act together with external ones)."""
+    if not supported or not system.terms:
+        return None
+    span = (t0 + float(min(0.0, np.min(t))), t0 + float(max(0.0, np.max(t))))
+    specs = []
+    for body in body_list:
+        groups = []
+        for models in (system.kick_terms, system.drag_terms, system.internal_terms):
+            if not models:
+                groups.append((np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+                               np.zeros(0)))
+                continue
+            c = compile_torques(models, body, t_span=span)
+            if c is None:
+                return None
+            groups.append((c.kinds, c.offsets, c.params))
+        specs.append(groups)
+    return specs
+
+
+def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step, mode,
+                  rtol, scheme, embedded, rk_order, w_floor, anchor, out_q, out_w):
+    """Each body through :func:`attitude.propagation.compiled_loop.march_one`."""
+    flags = (bool(system.kick_terms), bool(system.drag_terms), bool(system.internal_terms))
+    coeffs = (np.array(scheme.b), np.array(scheme.a))
+    emb = embedded if embedded is not None else scheme
+    ecoeffs = (np.array(emb.b), np.array(emb.a))
+    expo = 0.0
+    if mode == "rtol":
+        low = min(scheme.order, emb.order)
+        expo = 1.0 / (low + 1.0) if emb.order != scheme.order else 0.2
+    h_limit = math.inf if step is None else h_max
+    for i, groups in enumerate(specs):
+        fc = np.array(system.free.row(i), dtype=float)
+        frame = (np.ascontiguousarray(system.q_bp[i], dtype=float), system.identity,
+                 np.ascontiguousarray(system.inv_moments[i], dtype=float))
+        torq = (tuple(groups[0]), tuple(groups[1]), tuple(groups[2]), flags)
+        moments = np.ascontiguousarray(system.moments[i], dtype=float)
+        anc = (np.ascontiguousarray(anchor[i], dtype=float) if anchor is not None
+               else np.zeros(3))
+        for idx in segments:
+            times = np.ascontiguousarray(t[idx], dtype=float)
+            oq = np.empty((idx.size, 4))
+            ow = np.empty((idx.size, 3))
+            h = h_max if mode != "rtol" else min(h_rule, h_max)
+            code = compiled_loop.march_one(
+                fc, torq, frame, moments, anc, coeffs, ecoeffs,
+                np.ascontiguousarray(q_p0[i]), np.ascontiguousarray(w_p0[i]), t0, times,
+                float(h), compiled_loop.MODES[mode], float(rtol or 0.0), expo, w_floor,
+                h_limit, SNAP, rk_order, oq, ow)
+            if code < 0:
+                raise PropagationError(
+                    f"splitting with rtol={rtol:g}: the step fell below round-off before "
+                    f"t = {t0 + times[-code - 1]:.9g} s; loosen rtol or use "
+                    "method='integrator'", key="rtol")
+            out_q[i, idx] = oq
+            out_w[i, idx] = ow
+
+
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
                         order: int | None = None, scheme: str | None = None,
                         progress: bool = False, steps_per_period: float | None = None,
                         t0: float = 0.0, rtol: float | None = None,
-                        dense: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                        dense: bool = True, compiled: bool | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Propagate rigid bodies under torques with a splitting method.
 
     The exact free rigid-body flow alternates with torque kicks (see the module
@@ -1263,6 +1327,16 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         composition from the step's start (its error is that of one step).  With
         ``False`` each interval between outputs is cut into equal steps no longer than
         ``step`` (every output then lies on a step boundary).
+    compiled : bool, optional
+        Run the compiled loop (:mod:`attitude.propagation.compiled_loop`, numba): each
+        body on its own, a few microseconds per step.  Default: when numba is installed
+        and every torque model has a compiled form
+        (:func:`attitude.propagation.compiled_torques.compile_torques`; a user's Python
+        torque has none).  ``False`` forces the numpy path (bodies of a batch
+        vectorised, one common step), which gives the same results to round-off;
+        ``True`` raises if a torque has no compiled form (without numba it runs the
+        same scalar loop as Python: slow, for tests).  With ``rtol`` the compiled loop
+        controls the error of each body separately (the numpy path: the worst body).
 
     Returns
     -------
@@ -1361,6 +1435,21 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     def store(j, q, w):
         ops.store(out_q, out_w, j, q, w)
 
+    specs = None
+    torqued = has_kick or has_drag or has_internal
+    if torqued and (compiled or (compiled is None and compiled_loop.NUMBA)):
+        specs = _compiled_specs(system, body_list, t0, t, anchor is not None or not has_internal)
+        if compiled and specs is None:
+            raise InvalidStateError("compiled=True: a torque model has no compiled form (a "
+                                    "Python function or model), or internal torques act "
+                                    "together with external ones; use compiled=None",
+                                    key="compiled")
+    if specs is not None:
+        _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step,
+                      mode, rtol, run_scheme, embedded, rk_order, w_floor, anchor,
+                      out_q, out_w)
+        segments = []
+
     try:
         for idx in segments:
             if n == 1:
@@ -1370,7 +1459,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
             h = h_max if mode != "rtol" else min(h_rule, h_max)
             _march(stepper, q, w, t0, [(int(j), float(t[j])) for j in idx], store, h,
                    mode=mode, rtol=rtol, embedded=embedded, w_floor=w_floor,
-                   h_limit=h_max, bar=bar)
+                   h_limit=math.inf if step is None else h_max, bar=bar)
     finally:
         bar.close()
     if system.identity:
