@@ -267,6 +267,8 @@ def march_one(fc, torq, frame, moments, anchor, scheme, embedded, q0, w0, t0, ti
     k = 0
     j = 0
     steps = 0
+    err = 0.0
+    pend_new = 0.0
     while j < n_out:
         tj = times[j]
         if abs(tj - t_now) <= tol:
