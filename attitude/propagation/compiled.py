@@ -1,0 +1,575 @@
+r"""Compiled scalar kernels of the splitting integrator's one-body path (numba, optional).
+
+The one-body step of :mod:`attitude.propagation.splitting` costs ~470 us of Python and
+numpy dispatch; most of it is the exact free flow.  This module holds that flow and the
+special functions it needs as *scalar* functions written so that numba compiles them
+(``nopython``, no allocation), and so that they still run as plain Python when numba is
+absent or disabled:
+
+- :data:`NUMBA` is True when numba imports and ``ATTITUDE_NO_NUMBA=1`` is not set;
+- :func:`jit` is ``numba.njit(cache=True, error_model="numpy")`` then, else the
+  identity.  No ``fastmath``: the compiled path must round as IEEE arithmetic does, so
+  that it agrees with the numpy fallback to round-off (``tests/test_compiled.py``);
+- :func:`ellipj` (Jacobi ``sn, cn, dn``), :func:`elliprf` and :func:`elliprj`
+  (Carlson's symmetric integrals): the algorithms of ``scipy.special`` (Cephes' AGM
+  for ``ellipj``, Carlson's duplication for ``R_F``, ``R_J``), as scalar code;
+- :func:`free_flow_one`: ``splitting._free_flow1`` (the exact free flow of one body
+  over one step) on arrays updated in place.
+
+Every function here is a plain-arithmetic twin of the numpy/scipy path; the tests run
+each one compiled and as plain Python (``.py_func``) against scipy, mpmath and the
+splitting module.
+
+The one deliberate difference from scipy is :func:`ellipj` at ``1 - m <= 1e-10``: Cephes
+switches there to the expansion in ``1 - m`` about ``m = 1`` (A&S 16.15), which holds
+only well inside the first quarter period; beyond it scipy returns values that are not
+elliptic functions at all (``sn > 1``, ``cn = -2.9e5`` at ``u = 40``, ``m = 1 - 1e-11``).
+Here the expansion is used only where its next term is below the rounding error, and
+the AGM (carried to as many levels as ``m`` needs) everywhere else.
+
+References
+----------
+.. [1] Abramowitz, M. & Stegun, I. A. (1964). *Handbook of Mathematical Functions*,
+   16.4 (the AGM scale), 16.13 (m near 0), 16.15 (m near 1); DLMF 22.20(ii).
+.. [2] Moshier, S. L. (1989). *Methods and Programs for Mathematical Functions*
+   (Cephes ``ellpj``, as in ``scipy.special.ellipj``).
+.. [3] Carlson, B. C. (1995). Numerical computation of real or complex elliptic
+   integrals. *Numer. Algorithms* 10, 13-26; DLMF 19.36.1-2.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from .. import freebody as fb
+from .. import quaternion as quat
+
+__all__ = ["NUMBA", "jit", "ellipj", "elliprf", "elliprj", "free_flow_one"]
+
+#: Unit roundoff of float64 (half the spacing of 1.0): the AGM's stopping test (Cephes'
+#: MACHEP) and Carlson's ``r``.
+_U = 2.0 ** -53
+
+
+def _numba():
+    """The numba module, or None when it is absent or ``ATTITUDE_NO_NUMBA=1``."""
+    if os.environ.get("ATTITUDE_NO_NUMBA", "") == "1":
+        return None
+    try:
+        import numba  # optional (wheels on x86-64/aarch64 only): the kernels compile with it
+    except ImportError:
+        return None
+    return numba
+
+
+_NB = _numba()
+#: True when the kernels below are compiled by numba (importable and not disabled by the
+#: environment variable ``ATTITUDE_NO_NUMBA=1``); False: they run as plain Python.
+NUMBA = _NB is not None
+
+
+def jit(function):
+    """Compile ``function`` with numba (``njit``, cached, numpy error model, no fastmath)
+    when :data:`NUMBA`, else return it unchanged.
+
+    The compiled function keeps the Python one as ``.py_func``.  Compiled code is cached
+    beside the source (numba's ``__pycache__``), or not cached when there is no source
+    file.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import jit
+    >>> @jit
+    ... def twice(x):
+    ...     return 2.0 * x
+    >>> twice(1.5)
+    3.0
+    """
+    if _NB is None:
+        return function
+    try:
+        return _NB.njit(cache=True, error_model="numpy")(function)
+    except RuntimeError:          # no file to cache it beside (typed at a prompt, doctest)
+        return _NB.njit(error_model="numpy")(function)
+
+
+# ===========================================================================
+# Jacobi elliptic functions
+# ===========================================================================
+#: Cephes' switch to the expansions about m = 0 and m = 1 (A&S 16.13, 16.15).
+_M_SMALL = 1e-9
+_M1_SMALL = 1e-10
+#: The expansion about m = 1 is used while ``(1 - m) cosh(u)^2`` is at most this: its
+#: relative error is of the order of the square of that number (the next term of
+#: A&S 16.15), here below the unit roundoff.
+_NEAR1_MAX = 1e-8
+
+
+@jit
+def _amplitude(a, b, c, twon, u):
+    """``(phi_i, phi_{i+1})`` of the AGM's backward recurrence from level ``i``
+    (``a_i, b_i, c_i``, ``twon = 2^i``) down to convergence (A&S 16.4.3): recursive, so
+    that the levels live on the call stack (no array, any number of levels)."""
+    if abs(c / a) <= _U or twon >= 2.0 ** 40:
+        phi = twon * a * u
+        return phi, phi
+    a1 = (a + b) / 2.0
+    c1 = (a - b) / 2.0
+    b1 = math.sqrt(a * b)
+    phi1, _ = _amplitude(a1, b1, c1, 2.0 * twon, u)
+    return (math.asin(c1 * math.sin(phi1) / a1) + phi1) / 2.0, phi1
+
+
+#: The descending Landen chain ends where the parameter is below this (its base level
+#: is then the expansion about m = 0, A&S 16.13, to O(mu^2)); as attitude.elliptic.
+_MU_BASE = 1e-10
+
+
+@jit
+def _landen(x, kp, omk):
+    """``sn, cn, dn (x | m)`` for ``m = 1 - kp^2``, ``omk = 1 - kp`` (formed without
+    cancellation), by the descending Landen transformation (A&S 16.12.2-4), each level
+    without cancellation (``dn = ((1 - g) + g c^2) / (1 + g s^2)``); recursive, one
+    level per call (attitude.elliptic.landen_sncndn, in scalar float64)."""
+    g = omk / (1.0 + kp)
+    omg = 2.0 * kp / (1.0 + kp)
+    xs = x / (1.0 + g)
+    mu = g * g
+    if mu < _MU_BASE:
+        s0 = math.sin(xs)
+        c0 = math.cos(xs)
+        corr = (0.25 * mu) * (xs - s0 * c0)
+        s = s0 - corr * c0
+        c = c0 + corr * s0
+        d = 1.0 - (0.5 * mu) * (s0 * s0)
+    else:
+        sq = math.sqrt(kp)
+        s, c, d = _landen(xs, 2.0 * sq / (1.0 + kp), (omk / (1.0 + sq)) ** 2 / (1.0 + kp))
+    inv = 1.0 / (1.0 + g * (s * s))
+    return (1.0 + g) * inv * s, c * d * inv, (omg + g * (c * c)) * inv
+
+
+@jit
+def _ellipj_near1(u, m, m1):
+    """``sn, cn, dn`` for ``m`` near 1 beyond the expansion about ``m = 1``: ``u`` reduced
+    to ``[0, K/2]`` by the periods and the quarter-period reflection (DLMF 22.4.3,
+    22.4(iii)), where :func:`_landen` keeps ``cn`` and ``dn`` (``>= m1^(1/4)`` there)
+    to full relative precision; ``K`` from the same Landen chain (A&S 17.5)."""
+    kp = math.sqrt(m1)
+    omk = m / (1.0 + kp)
+    scale = 1.0
+    k, o = kp, omk
+    while True:
+        g = o / (1.0 + k)
+        scale *= 1.0 + g
+        if g * g < _MU_BASE:
+            break
+        sq = math.sqrt(k)
+        o = (o / (1.0 + sq)) ** 2 / (1.0 + k)
+        k = 2.0 * sq / (1.0 + k)
+    mu = g * g
+    K = scale * (math.pi / 2.0) * (1.0 + mu / 4.0 + 9.0 * mu * mu / 64.0)
+    n = math.floor(u / (2.0 * K) + 0.5)
+    x = u - 2.0 * K * n                              # in [-K, K]; sn, cn change sign
+    sgn = -1.0 if n % 2.0 != 0.0 else 1.0
+    ax = abs(x)
+    if ax <= 0.5 * K:
+        s, c, d = _landen(ax, kp, omk)
+    else:                                            # reflection about the quarter period
+        s1, c1, d1 = _landen(K - ax, kp, omk)
+        s, c, d = c1 / d1, kp * s1 / d1, kp / d1
+    return math.copysign(s, x) * sgn, c * sgn, d
+
+
+@jit
+def ellipj(u, m):
+    """Jacobi elliptic functions ``sn, cn, dn`` of real ``u`` and parameter ``0 <= m <= 1``.
+
+    Cephes' algorithm (``scipy.special.ellipj``): the expansion about ``m = 0`` below
+    ``m = 1e-9`` (A&S 16.13), the AGM scale and its backward recurrence for the
+    amplitude (A&S 16.4, DLMF 22.20(ii)), ``dn = cos(phi) / cos(phi - phi_1)`` unless
+    that quotient is small (then ``sqrt(1 - m sn^2)``), and the expansion about ``m = 1``
+    above ``m = 1 - 1e-10`` (A&S 16.15), the latter only where it holds (module notes):
+    elsewhere the AGM, with as many levels as it needs.
+
+    Parameters
+    ----------
+    u : float
+        Argument.
+    m : float
+        Parameter ``k^2`` in ``[0, 1]``; NaN outside.
+
+    Returns
+    -------
+    sn, cn, dn : float
+
+    Examples
+    --------
+    >>> from scipy import special
+    >>> from attitude.propagation.compiled import ellipj
+    >>> sn, cn, dn = ellipj(0.7, 0.3)
+    >>> [bool(abs(x - y) < 1e-15) for x, y in zip((sn, cn, dn), special.ellipj(0.7, 0.3)[:3])]
+    [True, True, True]
+    """
+    if not (0.0 <= m <= 1.0):
+        return math.nan, math.nan, math.nan
+    if m < _M_SMALL:
+        t = math.sin(u)
+        b = math.cos(u)
+        ai = 0.25 * m * (u - t * b)
+        return t - ai * b, b + ai * t, 1.0 - 0.5 * m * t * t
+    m1 = 1.0 - m
+    if m1 <= _M1_SMALL:
+        au = abs(u)
+        if m1 == 0.0:                  # sn = tanh, cn = dn = sech (no overflow in cosh)
+            e = math.exp(-au)
+            sech = 2.0 * e / (1.0 + e * e)
+            return math.tanh(u), sech, sech
+        if au < 20.0:
+            b = math.cosh(u)
+            if m1 * b * b <= _NEAR1_MAX:
+                ai = 0.25 * m1
+                t = math.tanh(u)
+                phi = 1.0 / b
+                twon = b * math.sinh(u)
+                sn = t + ai * (twon - u) / (b * b)
+                ai *= t * phi
+                return sn, phi - ai * (twon - u), phi + ai * (twon + u)
+        return _ellipj_near1(u, m, m1)
+    phi, phi1 = _amplitude(1.0, math.sqrt(m1), math.sqrt(m), 1.0, u)
+    sn = math.sin(phi)
+    cn = math.cos(phi)
+    dnfac = math.cos(phi - phi1)
+    if abs(dnfac) < 0.1:               # dn near a quarter period (after DLMF 22.20.5)
+        dn = math.sqrt(1.0 - m * sn * sn)
+    else:
+        dn = cn / dnfac
+    return sn, cn, dn
+
+
+# ===========================================================================
+# Carlson's symmetric elliptic integrals (Carlson 1995; DLMF 19.36.1-2)
+# ===========================================================================
+@jit
+def elliprf(x, y, z):
+    """Carlson's ``R_F(x, y, z)`` for ``x, y, z >= 0``, at most one of them zero.
+
+    Duplication (Carlson 1995, algorithm 1, ``r`` = the unit roundoff) and the fifth-
+    order series of DLMF 19.36.1.  ``inf`` when two arguments are zero, NaN for a
+    negative or NaN argument.
+
+    Examples
+    --------
+    >>> from scipy import special
+    >>> from attitude.propagation.compiled import elliprf
+    >>> bool(abs(elliprf(0.0, 0.25, 1.0) - special.elliprf(0.0, 0.25, 1.0)) < 1e-15)
+    True
+    """
+    if not (x >= 0.0 and y >= 0.0 and z >= 0.0):
+        return math.nan
+    if x + y == 0.0 or x + z == 0.0 or y + z == 0.0:
+        return math.inf
+    if x == math.inf or y == math.inf or z == math.inf:
+        return 0.0
+    a0 = (x + y + z) / 3.0
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z)) / (3.0 * _U) ** (1.0 / 6.0)
+    a = a0
+    x0, y0 = x, y
+    f = 1.0                                           # 4^-n
+    while f * q >= abs(a):
+        sx, sy, sz = math.sqrt(x), math.sqrt(y), math.sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        x = (x + lam) / 4.0
+        y = (y + lam) / 4.0
+        z = (z + lam) / 4.0
+        a = (a + lam) / 4.0
+        f /= 4.0
+    X = (a0 - x0) * f / a
+    Y = (a0 - y0) * f / a
+    Z = -(X + Y)
+    e2 = X * Y - Z * Z
+    e3 = X * Y * Z
+    s = (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0
+         - 5.0 * e2 * e2 * e2 / 208.0 + 3.0 * e3 * e3 / 104.0 + e2 * e2 * e3 / 16.0)
+    return s / math.sqrt(a)
+
+
+@jit
+def _rc1(e):
+    """``R_C(1, 1 + e)`` for ``e > -1`` (DLMF 19.2.19-20): ``atan(sqrt e)/sqrt e``, or
+    ``atanh(sqrt(-e))/sqrt(-e)`` for ``e < 0``."""
+    if e > 0.0:
+        s = math.sqrt(e)
+        return math.atan(s) / s
+    if e < 0.0:
+        s = math.sqrt(-e)
+        return math.atanh(s) / s
+    return 1.0
+
+
+@jit
+def elliprj(x, y, z, p):
+    """Carlson's ``R_J(x, y, z, p)`` for ``x, y, z >= 0`` (at most one zero) and ``p > 0``.
+
+    Duplication (Carlson 1995, algorithm 3, with ``d_m``, ``e_m`` and ``R_C(1, 1 + e_m)``
+    of DLMF 19.36.2) and the series of DLMF 19.36.2.  ``inf`` when two of ``x, y, z``
+    are zero, 0 for ``p = inf``, NaN for other arguments out of range.
+
+    Examples
+    --------
+    >>> from scipy import special
+    >>> from attitude.propagation.compiled import elliprj
+    >>> v = special.elliprj(0.3, 0.64, 1.0, 1.5)
+    >>> bool(abs(elliprj(0.3, 0.64, 1.0, 1.5) - v) < 4e-16 * v)
+    True
+    """
+    if not (x >= 0.0 and y >= 0.0 and z >= 0.0 and p > 0.0):
+        return math.nan
+    if x + y == 0.0 or x + z == 0.0 or y + z == 0.0:
+        return math.inf
+    if p == math.inf or x == math.inf or y == math.inf or z == math.inf:
+        return 0.0
+    a0 = (x + y + z + 2.0 * p) / 5.0
+    delta = (p - x) * (p - y) * (p - z)
+    q = (max(abs(a0 - x), abs(a0 - y), abs(a0 - z), abs(a0 - p))
+         / (0.25 * _U) ** (1.0 / 6.0))
+    a = a0
+    x0, y0, z0 = x, y, z
+    f = 1.0                                           # 4^-n
+    f3 = 1.0                                          # 4^-3n
+    total = 0.0
+    while f * q >= abs(a):
+        sx, sy, sz, sp = math.sqrt(x), math.sqrt(y), math.sqrt(z), math.sqrt(p)
+        lam = sx * sy + sx * sz + sy * sz
+        d = (sp + sx) * (sp + sy) * (sp + sz)
+        total += f / d * _rc1(f3 * delta / (d * d))
+        x = (x + lam) / 4.0
+        y = (y + lam) / 4.0
+        z = (z + lam) / 4.0
+        p = (p + lam) / 4.0
+        a = (a + lam) / 4.0
+        f /= 4.0
+        f3 /= 64.0
+    X = (a0 - x0) * f / a
+    Y = (a0 - y0) * f / a
+    Z = (a0 - z0) * f / a
+    P = -(X + Y + Z) / 2.0
+    xyz = X * Y * Z
+    e2 = X * Y + X * Z + Y * Z - 3.0 * P * P
+    e3 = xyz + 2.0 * e2 * P + 4.0 * P * P * P
+    e4 = (2.0 * xyz + e2 * P + 3.0 * P * P * P) * P
+    e5 = xyz * P * P
+    s = (1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0 - 3.0 * e4 / 22.0
+         - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0)
+    return f * s / (a * math.sqrt(a)) + 6.0 * total
+
+
+# ===========================================================================
+# the exact free flow of one body over one step (splitting._free_flow1)
+# ===========================================================================
+# The freebody helpers that are pure arithmetic on their arguments compile as they are.
+# The others take a scalar fast path chosen by ``isinstance`` (or call a helper that is
+# not compiled), which numba does not type: their float branches are repeated below,
+# operation for operation, so that both paths round alike (tests/test_compiled.py
+# compares each twin with its original).
+_separatrix_gap = jit(fb.separatrix_gap)
+_jacobi_parameters = jit(fb.jacobi_parameters)
+_multiply_parts = jit(quat.multiply_parts)
+_conjugate_parts = jit(quat.conjugate_parts)
+_PURE_SPIN_TOL = fb.PURE_SPIN_TOL_UNSCALED
+
+
+@jit
+def _invariants(I1, I2, I3, w1, w2, w3):
+    """fb.invariants (which calls fb.separatrix_gap, a Python function to numba)."""
+    d21, d32, d31 = I2 - I1, I3 - I2, I3 - I1
+    w1s, w2s, w3s = w1 * w1, w2 * w2, w3 * w3
+    Q1 = I1 * d31 * w1s + I2 * d32 * w2s
+    Q3 = I2 * d21 * w2s + I3 * d31 * w3s
+    D = _separatrix_gap(I1, I2, I3, w1, w3)
+    L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
+    return d21, d32, d31, Q1, Q3, D, L2
+
+
+@jit
+def _kernel_moments(A, B, C, lam):
+    """fb.kernel_moments, bool branch."""
+    if lam:
+        return C, B, A
+    return A, B, C
+
+
+@jit
+def _kernel_vector(x1, x2, x3, lam):
+    """fb.kernel_vector, bool branch."""
+    if lam:
+        return x3, -x2, x1
+    return x1, x2, x3
+
+
+@jit
+def _half_theta(L1, L2, L3):
+    """fb.half_theta, float branch."""
+    rho = math.hypot(L1, L2)
+    Lt = math.hypot(rho, L3)
+    if Lt == 0.0:
+        return math.nan, math.nan
+    h = math.sqrt((Lt + abs(L3)) / (2.0 * Lt))
+    o = rho / (2.0 * Lt * h)
+    if L3 >= 0:
+        return h, o
+    return o, h
+
+
+@jit
+def _euler313_quaternion(ct, st, phi, psi):
+    """fb.euler313_quaternion, float branch."""
+    hp = 0.5 * (phi + psi)
+    hm = 0.5 * (phi - psi)
+    return st * math.cos(hm), st * math.sin(hm), ct * math.sin(hp), ct * math.cos(hp)
+
+
+@jit
+def _clip(x, lo, hi):
+    return lo if x < lo else (hi if x > hi else x)
+
+
+@jit
+def _round_half_even(x):
+    """Python's ``round(x)`` of a float (ties to even), as a float."""
+    r = math.floor(x)
+    d = x - r                                        # exact, in [0, 1)
+    if d > 0.5 or (d == 0.5 and r % 2.0 != 0.0):
+        r += 1.0
+    return r
+
+
+@jit
+def _rotate_by(q, gx, gy, gz, gw):
+    """``q <- q g / |q g|`` in place (splitting._qmul1)."""
+    nx, ny, nz, nw = _multiply_parts((q[0], q[1], q[2], q[3]), (gx, gy, gz, gw))
+    r = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+    q[0] = nx * r
+    q[1] = ny * r
+    q[2] = nz * r
+    q[3] = nw * r
+
+
+@jit
+def _uniform(q, o1, o2, o3, h):
+    """Uniform rotation about ``omega`` (splitting._uniform1); ``w`` stays."""
+    wn = math.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
+    half = 0.5 * wn * h
+    sh = math.sin(half) / wn if wn > 0 else 0.0
+    _rotate_by(q, sh * o1, sh * o2, sh * o3, math.cos(half))
+
+
+@jit
+def free_flow_one(c, q, w, h):
+    """Exact torque-free motion of one body over ``h``, in place: ``splitting._free_flow1``.
+
+    Parameters
+    ----------
+    c : float64 array (7,)
+        ``[A, B, C, spherical, lam_on_tie, nu_sam, nu_lam]``: the moments scaled by a
+        power of two and the flags (0 or 1) and characteristics of
+        ``splitting._FreeConstants`` (its ``row``).
+    q : float64 array (4,)
+        Principal -> inertial quaternion, scalar-last, unit; overwritten with ``q(t + h)``.
+    w : float64 array (3,)
+        Principal-frame rates, rad/s; overwritten with ``omega(t + h)``.
+    h : float
+        Interval, s (any sign).
+
+    Notes
+    -----
+    The formulas and their numbering (S1-S5) are those of
+    :func:`attitude.propagation.splitting.free_flow`; the special functions are
+    :func:`ellipj`, :func:`elliprf` and :func:`elliprj` of this module.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.compiled import free_flow_one
+    >>> from attitude.propagation.splitting import free_flow
+    >>> q, w = np.array([0.0, 0.0, 0.0, 1.0]), np.array([0.1, 0.2, 1.0])
+    >>> qr, wr = free_flow([0.25, 0.5, 0.75], q, w, 2.5)
+    >>> free_flow_one(np.array([0.25, 0.5, 0.75, 0, 0, 3.0, 1 / 3]), q, w, 2.5)
+    >>> bool(np.allclose(q, qr, rtol=0, atol=1e-15) and np.allclose(w, wr, rtol=0, atol=1e-15))
+    True
+    """
+    A, B, C = c[0], c[1], c[2]
+    o1, o2, o3 = w[0], w[1], w[2]
+    if c[3] != 0.0:                                   # spherical                  (S5)
+        _uniform(q, o1, o2, o3, h)
+        return
+    delta = _separatrix_gap(A, B, C, o1, o3)
+    lam = delta < 0 or (delta == 0 and c[4] != 0.0)  # kernel frame                (S1)
+    I1, I2, I3 = _kernel_moments(A, B, C, lam)
+    w1, w2, w3 = _kernel_vector(o1, o2, o3, lam)
+    nu = c[6] if lam else c[5]
+    d21, d32, d31, Q1, Q3, Dk, Lsq = _invariants(I1, I2, I3, w1, w2, w3)
+    L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
+    L = math.sqrt(Lsq)
+    a_, b_, c_ = abs(L1), abs(L2), abs(L3)
+    mid = max(min(a_, b_), min(max(a_, b_), c_))
+    w2s = w2 * w2
+    if mid <= _PURE_SPIN_TOL * L or not d32 * Q3 > 0:
+        _uniform(q, o1, o2, o3, h)
+        return
+    m, m1, lam2 = _jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
+    m = _clip(m, 0.0, 1.0)
+    m1 = _clip(m1, 0.0, 1.0)
+    s = -1.0 if w3 < 0 else 1.0
+    lamb = (-s if lam else s) * math.sqrt(lam2)
+    v = lamb * h
+    sn, cn, dn = ellipj(v, m)
+    snl = sn / lamb
+    D = 1.0 - (I2 * d21 / Q3) * w2s * (sn * sn)     # addition theorems            (S2)
+    n1 = (w1 * cn - (d32 / I1) * w2 * w3 * snl * dn) / D
+    n2 = (w2 * cn * dn + (d31 / I2) * w1 * w3 * snl) / D
+    n3 = (w3 * dn - (d21 / I3) * w1 * w2 * snl * cn) / D
+    a1 = math.sqrt(Q1 / (I1 * d31))                  # precession angle            (S3)
+    a2 = math.sqrt(Q1 / (I2 * d32))
+    a3 = s * math.sqrt(Q3 / (I3 * d31))
+    sn0 = _clip(w2 / a2, -1.0, 1.0)
+    cn0 = _clip(w1 / a1, -1.0, 1.0)
+    dn0 = min(w3 / a3, 1.0)
+    sn1 = _clip(n2 / a2, -1.0, 1.0)
+    cn1 = _clip(n1 / a1, -1.0, 1.0)
+    dn1 = min(n3 / a3, 1.0)
+    if nu == 0:
+        S0 = 0.0
+        S1 = 0.0
+    else:
+        nu3 = nu / 3.0
+        S0 = nu3 * sn0 ** 3 * elliprj(cn0 * cn0, dn0 * dn0, 1.0, 1.0 + nu * sn0 * sn0)
+        S1 = nu3 * sn1 ** 3 * elliprj(cn1 * cn1, dn1 * dn1, 1.0, 1.0 + nu * sn1 * sn1)
+    p0, p1 = cn0 >= 0, cn1 >= 0
+    dwin = 0.0 if p0 == p1 else (1.0 if v >= 0 else -1.0)
+    if abs(v) >= math.pi and m1 > 0:
+        K = elliprf(0.0, m1, 1.0)
+        uh = sn0 * elliprf(cn0 * cn0, dn0 * dn0, 1.0)
+        u0 = uh if p0 else math.copysign(2.0 * K, sn0) - uh
+        dwin = _round_half_even((u0 + v) / (2.0 * K)) - _round_half_even(u0 / (2.0 * K))
+    dJ = (S1 if p1 else -S1) - (S0 if p0 else -S0)
+    if dwin != 0:
+        dJ += 2.0 * dwin * (nu / 3.0) * elliprj(0.0, m1, 1.0, 1.0 + nu)
+    c1 = L * d31 / (I1 * I3)
+    dphi = h * (L / I3 + c1) - c1 * dJ / lamb
+    ct0, st0 = _half_theta(L1, L2, L3)               # attitude                    (S4)
+    M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
+    ct1, st1 = _half_theta(M1, M2, M3)
+    e = _euler313_quaternion(ct0, st0, 0.0, math.atan2(L1, L2))
+    f = _euler313_quaternion(ct1, st1, dphi, math.atan2(M1, M2))
+    gx, gy, gz, gw = _multiply_parts(_conjugate_parts(e), f)
+    gx, gy, gz = _kernel_vector(gx, gy, gz, lam)     # the step in principal axes
+    p1_, p2_, p3_ = _kernel_vector(n1, n2, n3, lam)
+    if not math.isfinite(gx + gy + gz + gw + p1_ + p2_ + p3_):
+        _uniform(q, o1, o2, o3, h)
+        return
+    _rotate_by(q, gx, gy, gz, gw)
+    w[0] = p1_
+    w[1] = p2_
+    w[2] = p3_
