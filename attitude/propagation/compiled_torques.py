@@ -102,11 +102,14 @@ def _eccentric_anomaly(M, e):
     x = abs(Mr)
     lo, hi = x, min(x + e, math.pi)
     E = x + 0.85 * e
-    p = 6.0 * (1.0 - e) / e
-    cubic = 2.0 * math.sqrt(p / 3.0) * math.sinh(
-        math.asinh(1.5 * (6.0 * x / e) / p * math.sqrt(3.0 / p)) / 3.0)
-    if cubic < 1.0:
-        E = cubic
+    # the cubic (1 - e) E + e E^3 / 6 = x increases with E, so its root is below 1 only
+    # for x < 1 - 5 e / 6: skip its sinh and asinh beyond (a margin, 0.8 e, for rounding)
+    if x < 1.0 - 0.8 * e:
+        p = 6.0 * (1.0 - e) / e
+        cubic = 2.0 * math.sqrt(p / 3.0) * math.sinh(
+            math.asinh(1.5 * (6.0 * x / e) / p * math.sqrt(3.0 / p)) / 3.0)
+        if cubic < 1.0:
+            E = cubic
     E = min(max(E, lo), hi)
     for _ in range(50):
         se, ce = math.sin(E), math.cos(E)
