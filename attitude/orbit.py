@@ -381,6 +381,24 @@ class KeplerOrbit:
         W = np.array([sO * si, -cO * si, ci])
         return P, Q, W
 
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
+        """``("kepler", {...})``: the orbit as numbers for a compiled kernel, the terms of
+        :meth:`state` (``a``, ``e``, ``b = sqrt(1 - e^2)``, the mean anomaly at the epoch
+        and the mean motion, the unit vectors ``P`` and ``Q`` of the orbit's plane, ``mu``).
+
+        Examples
+        --------
+        >>> from attitude.orbit import KeplerOrbit
+        >>> kind, values = KeplerOrbit(mu=3.986004418e14, a=7.0e6).compiled_parameters()
+        >>> kind, values["P"]
+        ('kepler', array([1., 0., 0.]))
+        """
+        P, Q, _ = self._frame()
+        return ("kepler", {"mu": self.mu, "a": self.a, "e": self.e,
+                           "b": float(np.sqrt(1.0 - self.e**2)),
+                           "mean_anomaly": self.mean_anomaly,
+                           "mean_motion": self.mean_motion, "P": P.copy(), "Q": Q.copy()})
+
     # --- along the orbit -------------------------------------------------------------
     def mean_anomaly_at(self, t) -> np.ndarray:
         """``M(t) = M0 + n t``, rad (not reduced modulo 2 pi)."""
@@ -506,6 +524,31 @@ class TabulatedPath:
         """Derivative of the spline, m/s, shape ``S + (3,)``."""
         return self._dspline(self._check(t))
 
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
+        """``("piecewise_cubic", {breakpoints, coefficients})``: the spline itself (its
+        breakpoints ``(N,)`` and coefficients ``(4, N - 1, 3)``, highest power first, in
+        powers of ``t - breakpoint``) for a compiled kernel.
+
+        Raises
+        ------
+        OrbitError
+            If ``t_span`` reaches outside the table and extrapolation is off.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from attitude.orbit import TabulatedPath
+        >>> t = np.linspace(0.0, 100.0, 11)
+        >>> path = TabulatedPath(t, np.stack([7e6 + t, 0 * t, 0 * t], axis=-1))
+        >>> kind, values = path.compiled_parameters((0.0, 50.0))
+        >>> kind, values["coefficients"].shape
+        ('piecewise_cubic', (4, 10, 3))
+        """
+        if t_span is not None:
+            self._check(np.asarray(t_span, dtype=float))
+        return ("piecewise_cubic", {"breakpoints": np.array(self._spline.x, dtype=float),
+                                    "coefficients": np.array(self._spline.c, dtype=float)})
+
     def __repr__(self) -> str:
         return (f"TabulatedPath({self.times.size} samples, t in [{self.times[0]:.6g}, "
                 f"{self.times[-1]:.6g}] s)")
@@ -578,6 +621,17 @@ class ConstantPosition:
     def position(self, t) -> np.ndarray:
         t = np.asarray(t, dtype=float)
         return np.broadcast_to(self.vector, t.shape + (3,)).copy()
+
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
+        """``("fixed", {position})`` for a compiled kernel.
+
+        Examples
+        --------
+        >>> from attitude.orbit import ConstantPosition
+        >>> ConstantPosition([7e6, 0, 0]).compiled_parameters()
+        ('fixed', {'position': array([7000000.,       0.,       0.])})
+        """
+        return ("fixed", {"position": self.vector.copy()})
 
     def __repr__(self) -> str:
         return f"ConstantPosition({self.vector.tolist()})"

@@ -362,6 +362,29 @@ class TorqueModel:
             return self
         return _ShiftedTorque(self, dt)
 
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
+        """The model as numbers for a compiled torque kernel, or None when it has no
+        compiled form (the default: a user's model runs in Python).
+
+        A list of ``(kind, values)`` terms, one per elementary model, whose sum is this
+        model's torque on ``body`` (one body): ``kind`` names the formula, ``values``
+        holds its SI parameters and the paths or fields it reads (objects with their own
+        ``compiled_parameters``).  :func:`attitude.propagation.compiled_torques.compile_torques`
+        lays them out in flat arrays; ``t_span = (t0, t1)`` (s) is the time the run
+        covers, which a tabulated path needs.
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import ConstantTorque, FunctionTorque
+        >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> ConstantTorque([0.0, 0.0, 1e-3]).compiled_parameters(body)
+        [('constant_body', {'torque': array([0.   , 0.   , 0.001])})]
+        >>> FunctionTorque(lambda t, q, w, b: w).compiled_parameters(body) is None
+        True
+        """
+        return None
+
     def __add__(self, other):
         try:
             other = as_torque_model(other)
@@ -419,6 +442,26 @@ class SumTorque(TorqueModel):
         if float(dt) == 0.0:
             return self
         return SumTorque(*[term.shifted(dt) for term in self.terms])
+
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
+        """The terms' compiled forms, concatenated; None if any term has none.
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import ConstantTorque
+        >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> both = ConstantTorque([1e-3, 0, 0]) + ConstantTorque([0, 1e-3, 0], frame="inertial")
+        >>> [kind for kind, _ in both.compiled_parameters(body)]
+        ['constant_body', 'constant_inertial']
+        """
+        out = []
+        for term in self.terms:
+            part = term.compiled_parameters(body, t_span)
+            if part is None:
+                return None
+            out.extend(part)
+        return out
 
     def __call__(self, t, quaternion, omega_body, body) -> np.ndarray:
         total = None
@@ -637,6 +680,22 @@ class GravityGradient(TorqueModel):
             return GravityGradient(self.mu, _advance(self.orbit, dt))
         return super().shifted(dt)
 
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]]:
+        """``[("gravity_gradient", {mu, inertia, orbit})]``
+        (:meth:`TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import GravityGradient
+        >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> [(kind, sorted(v)) for kind, v in GravityGradient(
+        ...     3.986e14, [7e6, 0, 0]).compiled_parameters(body)]
+        [('gravity_gradient', ['inertia', 'mu', 'orbit'])]
+        """
+        return [("gravity_gradient", {"mu": self.mu, "inertia": _inertia_of(body),
+                                      "orbit": self.orbit})]
+
     def potential(self, t, quaternion, body) -> np.ndarray:
         """Gravity-gradient potential energy ``V = mu/(2 r^3)(3 r_hat.I r_hat - tr I)``, J.
 
@@ -698,6 +757,18 @@ class ConstantTorque(TorqueModel):
         if self.frame == "body":
             return self.torque.copy()
         return quat.rotate(quaternion, self.torque, inverse=True)
+
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]]:
+        """``[("constant_body" or "constant_inertial", {torque})]``
+        (:meth:`TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude.torques import ConstantTorque
+        >>> ConstantTorque([1.0, 0, 0], frame="inertial").compiled_parameters(None)[0][0]
+        'constant_inertial'
+        """
+        return [(f"constant_{self.frame}", {"torque": self.torque.copy()})]
 
     def shifted(self, dt: float) -> ConstantTorque:
         """Itself (no time dependence)."""
@@ -882,6 +953,21 @@ class EnergyDissipation(TorqueModel):
         """``1 / time_constant``, rad/s."""
         return 1.0 / self.time_constant
 
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]]:
+        """``[("dissipation", {k, inertia})]``, ``k`` the :meth:`coefficient` for
+        ``body`` (:meth:`TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import EnergyDissipation
+        >>> body = RigidBody.from_principal_moments([2.0, 4.0, 4.0])
+        >>> EnergyDissipation(10.0).compiled_parameters(body)[0][1]["k"]
+        0.2
+        """
+        return [("dissipation", {"k": float(self.coefficient(body)),
+                                 "inertia": _inertia_of(body)})]
+
     def shifted(self, dt: float) -> EnergyDissipation:
         """Itself (no time dependence)."""
         return self
@@ -1019,6 +1105,18 @@ class UniformField:
     def __call__(self, t) -> np.ndarray:
         return np.broadcast_to(self.vector, np.shape(t) + (3,)).copy()
 
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
+        """``("uniform", {vector})``: the field as numbers for a compiled kernel
+        (:meth:`TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude.torques import UniformField
+        >>> UniformField([0.0, 0.0, 3e-5]).compiled_parameters()
+        ('uniform', {'vector': array([0.e+00, 0.e+00, 3.e-05])})
+        """
+        return ("uniform", {"vector": self.vector.copy()})
+
     def __repr__(self) -> str:
         return f"UniformField({self.vector.tolist()} T)"
 
@@ -1098,6 +1196,25 @@ class TiltedDipoleField:
         r_hat = r / rn
         return _MU0_OVER_4PI * self.moment / (r2 * rn) * (
             3.0 * _dot(m_hat, r_hat)[..., None] * r_hat - m_hat)
+
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
+        """``("tilted_dipole", {...})``: the field as numbers for a compiled kernel, the
+        same terms as :meth:`__call__` (``coefficient = mu0 / 4 pi * moment``, the sine
+        and cosine of the tilt, the rotation angle, rate and pole longitude, the orbit).
+
+        Examples
+        --------
+        >>> from attitude.torques import TiltedDipoleField
+        >>> kind, values = TiltedDipoleField([7e6, 0.0, 0.0]).compiled_parameters()
+        >>> kind, float(values["coefficient"])
+        ('tilted_dipole', 7940000000000000.0)
+        """
+        return ("tilted_dipole", {
+            "coefficient": _MU0_OVER_4PI * self.moment,
+            "sin_tilt": float(np.sin(self.tilt)), "cos_tilt": float(np.cos(self.tilt)),
+            "rotation_angle": float(self.rotation_angle),
+            "rotation_rate": float(self.rotation_rate),
+            "pole_longitude": float(self.pole_longitude), "orbit": self.orbit})
 
     def __repr__(self) -> str:
         return (f"TiltedDipoleField(moment={self.moment:.4g} A m2, tilt="
@@ -1237,6 +1354,26 @@ class EddyCurrentDamping(TorqueModel):
             return EddyCurrentDamping(self.magnetic_tensor, field)
         return super().shifted(dt)
 
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
+        """``[("eddy_current", {tensor, field})]`` (``tensor`` 3 x 3, the isotropic
+        scalar times the identity), or None when the field has no compiled form (a
+        user's function) (:meth:`TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude.torques import EddyCurrentDamping, UniformField
+        >>> damper = EddyCurrentDamping(2.0, UniformField([0, 0, 3e-5]))
+        >>> damper.compiled_parameters(None)[0][1]["isotropic"]
+        True
+        """
+        if not callable(getattr(self.field, "compiled_parameters", None)):
+            return None
+        tensor = (float(self.magnetic_tensor) * np.eye(3) if self.isotropic
+                  else np.array(self.magnetic_tensor, dtype=float))
+        return [("eddy_current", {"tensor": tensor, "isotropic": self.isotropic,
+                                  "scalar": float(self.magnetic_tensor[()]) if
+                                  self.isotropic else 0.0, "field": self.field})]
+
     def evaluate(self, t, quaternion, omega_body, body):
         B = quat.rotate(quaternion, np.asarray(self.field(t), dtype=float), inverse=True)
         x = quat.cross(omega_body, B)
@@ -1350,6 +1487,30 @@ class HeavyTopPivot(TorqueModel):
         A = 1.0 / np.linalg.norm(np.linalg.inv(inertia) @ normal, ord=2, axis=(-2, -1))
         rate = np.sqrt(mgl / A)
         return float(rate) if np.ndim(rate) == 0 else rate
+
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]]:
+        """``[("heavy_top", {mass_g, up, pivot_to_com})]`` (``mass_g = m g``, the mass
+        from the body when not given) (:meth:`TorqueModel.compiled_parameters`).
+
+        Raises
+        ------
+        TorqueConfigError
+            If neither the model nor the body has a mass.
+
+        Examples
+        --------
+        >>> from attitude.torques import HeavyTopPivot
+        >>> top = HeavyTopPivot(mass=2.0, pivot_to_com=[0.0, 0.0, 0.1], g=10.0)
+        >>> top.compiled_parameters(None)[0][1]["mass_g"]
+        20.0
+        """
+        mass = self.mass if self.mass is not None else _mass_of(body)
+        if mass is None or np.ndim(mass) != 0:
+            raise TorqueConfigError("the body has no mass: give HeavyTopPivot a "
+                                    "mass, or build the body with one", key="mass")
+        return [("heavy_top", {"mass_g": float(mass) * self.g,
+                               "up": self.up.copy(),
+                               "pivot_to_com": self.pivot_to_com.copy()})]
 
     def shifted(self, dt: float) -> HeavyTopPivot:
         """Itself (no time dependence)."""

@@ -1,0 +1,477 @@
+"""Compiled forms of the built-in torque models, for the one-body splitting loop.
+
+A torque model is a Python object; calling it costs microseconds of dispatch, more
+than the physics.  :func:`compile_torques` asks each model for its compiled form
+(:meth:`attitude.torques.TorqueModel.compiled_parameters`: the formula's name, its SI
+parameters and the paths or fields it reads) and lays the models out in three flat
+arrays, ``kinds`` (one formula per term), ``offsets`` (where each term's numbers start)
+and ``params`` (all the numbers); :func:`body_torque` evaluates their sum at one time,
+attitude and rate with the same formulas as the models' ``__call__``, in the same order
+of operations, so that the two agree to round-off.
+
+========================  ==============================================================
+term                      ``params`` from ``offsets[k]``
+========================  ==============================================================
+``gravity_gradient``      ``mu``, inertia (9, row-major), path
+``constant_body``         torque (3)
+``constant_inertial``     torque (3)
+``heavy_top``             ``m g``, up (3), pivot -> centre of mass (3)
+``eddy_current``          isotropic (0 or 1), scalar, tensor (9), field
+``dissipation``           ``k``, inertia (9)
+========================  ==============================================================
+
+A path is ``kind`` then its numbers: ``fixed`` (0: position), ``kepler`` (1: ``a, e,
+b = sqrt(1 - e^2), M0, n, mu, P (3), Q (3)``, Kepler's equation solved as
+:func:`attitude.orbit.solve_kepler`), ``piecewise_cubic`` (2: the number of breakpoints,
+the breakpoints, the coefficients ``(4, intervals, 3)`` highest power first).  A field is
+``uniform`` (0: vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and cosine of the
+tilt, rotation angle, rate, pole longitude, then the orbit's path) or ``piecewise_cubic``
+(2, as a path).
+
+numba is optional: without it (or with ``ATTITUDE_NO_NUMBA=1``) the same functions run as
+plain Python, slowly but with the same results.  A model without a compiled form (a
+user's function or subclass, a :class:`~attitude.orbit.CallablePath`) makes
+:func:`compile_torques` return None: the caller then uses the Python models.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..body import RigidBody
+from ..errors import InvalidStateError
+from ..torques import TorqueModel
+
+# The same shim as attitude.propagation.compiled (to be replaced by an import from it):
+# numba is optional (no wheels on some platforms; ATTITUDE_NO_NUMBA=1 turns it off to
+# test the fallback), so it is imported under a guard at module level.
+if os.environ.get("ATTITUDE_NO_NUMBA") == "1":
+    _numba = None
+else:
+    try:
+        import numba as _numba
+    except ImportError:  # optional dependency: the plain-Python path is the fallback
+        _numba = None
+
+#: Whether the kernels are compiled by numba.
+NUMBA = _numba is not None
+
+
+def _jit(function):
+    """``numba.njit(cache=True, error_model="numpy")`` when numba is in use, else the
+    function itself."""
+    if NUMBA:
+        return _numba.njit(cache=True, error_model="numpy")(function)
+    return function
+
+
+__all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_KINDS"]
+
+#: Codes of the terms in ``kinds``.
+TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
+              "heavy_top": 3, "eddy_current": 4, "dissipation": 5}
+_GRAVITY_GRADIENT, _CONSTANT_BODY, _CONSTANT_INERTIAL, _HEAVY_TOP, _EDDY, _DISSIPATION = \
+    range(6)
+#: Codes of the paths (first number of a path block).
+_PATHS = {"fixed": 0, "kepler": 1, "piecewise_cubic": 2}
+_FIXED, _KEPLER, _PIECEWISE = 0.0, 1.0, 2.0
+#: Codes of the fields (first number of a field block).
+_FIELDS = {"uniform": 0, "tilted_dipole": 1, "piecewise_cubic": 2}
+_UNIFORM, _DIPOLE = 0.0, 1.0
+
+_EPS = float(np.finfo(float).eps)
+_TWO_PI = 2.0 * math.pi
+
+
+# --- kernels ----------------------------------------------------------------------------
+
+
+@_jit
+def _eccentric_anomaly(M, e):
+    """:func:`attitude.orbit.solve_kepler` for one ``M`` and ``0 < e < 1``: the same
+    reduction, starting value (Danby's, or the cubic near periapsis), Halley iteration
+    clipped to the bracket, and stopping rule (at most 50 iterations)."""
+    turns = np.rint(M / _TWO_PI)          # round half to even, as Python's round()
+    Mr = M - turns * _TWO_PI
+    sign = -1.0 if Mr < 0 else 1.0
+    x = abs(Mr)
+    lo, hi = x, min(x + e, math.pi)
+    E = x + 0.85 * e
+    # the cubic (1 - e) E + e E^3 / 6 = x increases with E, so its root is below 1 only
+    # for x < 1 - 5 e / 6: skip its sinh and asinh beyond (a margin, 0.8 e, for rounding)
+    if x < 1.0 - 0.8 * e:
+        p = 6.0 * (1.0 - e) / e
+        cubic = 2.0 * math.sqrt(p / 3.0) * math.sinh(
+            math.asinh(1.5 * (6.0 * x / e) / p * math.sqrt(3.0 / p)) / 3.0)
+        if cubic < 1.0:
+            E = cubic
+    E = min(max(E, lo), hi)
+    for _ in range(50):
+        se, ce = math.sin(E), math.cos(E)
+        f = E - e * se - x
+        f1 = 1.0 - e * ce
+        newton = -f / f1
+        En = min(max(E - f / (f1 + 0.5 * newton * e * se), lo), hi)
+        if abs(En - E) <= 4.0 * _EPS * max(En, 1.0) or abs(f) <= 2.0 * _EPS * E:
+            E = En
+            break
+        E = En
+    return sign * E + turns * _TWO_PI
+
+
+@_jit
+def _piecewise(params, i, t):
+    """A piecewise cubic block at ``params[i]`` (number of breakpoints, breakpoints,
+    coefficients ``(4, intervals, 3)``) at ``t``: the interval whose left end is the last
+    breakpoint <= t (the end intervals extrapolate, as scipy's ``PPoly``), Horner's rule."""
+    nb = int(params[i])
+    x0 = i + 1
+    c0 = x0 + nb
+    n = nb - 1
+    lo, hi = 0, n - 1                     # bisection for the interval
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if params[x0 + mid] <= t:
+            lo = mid
+        else:
+            hi = mid - 1
+    d = t - params[x0 + lo]
+    stride = 3 * n
+    j = c0 + 3 * lo
+    out0 = ((params[j] * d + params[j + stride]) * d + params[j + 2 * stride]) * d \
+        + params[j + 3 * stride]
+    out1 = ((params[j + 1] * d + params[j + 1 + stride]) * d + params[j + 1 + 2 * stride]) \
+        * d + params[j + 1 + 3 * stride]
+    out2 = ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride]) \
+        * d + params[j + 2 + 3 * stride]
+    return out0, out1, out2
+
+
+@_jit
+def _position(params, i, t):
+    """The path block at ``params[i]`` at ``t``: inertial position, m (as
+    :meth:`attitude.orbit.KeplerOrbit.state`: ``r = a ((cos E - e) P + b sin E Q)``)."""
+    kind = params[i]
+    if kind == _FIXED:
+        return params[i + 1], params[i + 2], params[i + 3]
+    if kind == _KEPLER:
+        a, e, b = params[i + 1], params[i + 2], params[i + 3]
+        M = params[i + 4] + params[i + 5] * t
+        E = M if e == 0.0 else _eccentric_anomaly(M, e)
+        cE, sE = math.cos(E), math.sin(E)
+        ce = cE - e
+        bs = b * sE
+        return (a * (ce * params[i + 7] + bs * params[i + 10]),
+                a * (ce * params[i + 8] + bs * params[i + 11]),
+                a * (ce * params[i + 9] + bs * params[i + 12]))
+    return _piecewise(params, i + 1, t)
+
+
+@_jit
+def _field(params, i, t):
+    """The field block at ``params[i]`` at ``t``: inertial field, T (as
+    :class:`attitude.torques.TiltedDipoleField`:
+    ``B = mu0 m / (4 pi r^3) (3 (m_hat . r_hat) r_hat - m_hat)``)."""
+    kind = params[i]
+    if kind == _UNIFORM:
+        return params[i + 1], params[i + 2], params[i + 3]
+    if kind == _DIPOLE:
+        coefficient, st, ct = params[i + 1], params[i + 2], params[i + 3]
+        lam = (params[i + 4] + params[i + 5] * t) + params[i + 6]
+        mx, my, mz = -(st * math.cos(lam)), -(st * math.sin(lam)), -ct
+        rx, ry, rz = _position(params, i + 7, t)
+        r2 = rx * rx + ry * ry + rz * rz
+        rn = math.sqrt(r2)
+        hx, hy, hz = rx / rn, ry / rn, rz / rn
+        scale = coefficient / (r2 * rn)
+        d3 = 3.0 * (mx * hx + my * hy + mz * hz)
+        return (scale * (d3 * hx - mx), scale * (d3 * hy - my), scale * (d3 * hz - mz))
+    return _piecewise(params, i + 1, t)
+
+
+@_jit
+def _to_body(qx, qy, qz, qw, vx, vy, vz):
+    """``v`` rotated by the inverse of ``q`` (inertial -> body), as
+    :func:`attitude.quaternion.rotate_parts` with ``inverse=True``."""
+    ux, uy, uz = -qx, -qy, -qz
+    tx = 2.0 * (uy * vz - uz * vy)
+    ty = 2.0 * (uz * vx - ux * vz)
+    tz = 2.0 * (ux * vy - uy * vx)
+    return (vx + qw * tx + uy * tz - uz * ty,
+            vy + qw * ty + uz * tx - ux * tz,
+            vz + qw * tz + ux * ty - uy * tx)
+
+
+@_jit
+def _matvec(params, i, x, y, z):
+    """The row-major 3 x 3 matrix at ``params[i]`` times ``(x, y, z)``."""
+    return (params[i] * x + params[i + 1] * y + params[i + 2] * z,
+            params[i + 3] * x + params[i + 4] * y + params[i + 5] * z,
+            params[i + 6] * x + params[i + 7] * y + params[i + 8] * z)
+
+
+@_jit
+def body_torque(kinds, offsets, params, t, q_b, w_b, out):
+    """Sum of the compiled torque models, body frame, N m, written into ``out``.
+
+    Parameters
+    ----------
+    kinds, offsets : (n,) int64 arrays
+        Term codes and where each term's numbers start in ``params``
+        (:class:`CompiledTorques`).
+    params : (m,) float64 array
+    t : float
+        Seconds since the run's epoch (the models' time).
+    q_b : (4,) float64 array
+        Attitude, body -> inertial, scalar-last (normalised here, as the models do).
+    w_b : (3,) float64 array
+        Body rates, rad/s.
+    out : (3,) float64 array
+        Receives the torque; nothing is allocated.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import ConstantTorque
+    >>> c = compile_torques([ConstantTorque([0.0, 0.0, 1e-3], frame="inertial")],
+    ...                     RigidBody.from_principal_moments([1.0, 2.0, 3.0]))
+    >>> out = np.zeros(3)
+    >>> half_turn_x = np.array([1.0, 0.0, 0.0, 0.0])
+    >>> body_torque(c.kinds, c.offsets, c.params, 0.0, half_turn_x, np.zeros(3), out)
+    >>> out + 0.0
+    array([ 0.   ,  0.   , -0.001])
+    """
+    norm = math.sqrt(q_b[0] * q_b[0] + q_b[1] * q_b[1] + q_b[2] * q_b[2] + q_b[3] * q_b[3])
+    qx, qy, qz, qw = q_b[0] / norm, q_b[1] / norm, q_b[2] / norm, q_b[3] / norm
+    w0, w1, w2 = w_b[0], w_b[1], w_b[2]
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    for k in range(kinds.shape[0]):
+        kind = kinds[k]
+        i = offsets[k]
+        if kind == _GRAVITY_GRADIENT:           # 3 mu / r^5 (r_b x I r_b)
+            rx, ry, rz = _position(params, i + 10, t)
+            bx, by, bz = _to_body(qx, qy, qz, qw, rx, ry, rz)
+            r2 = bx * bx + by * by + bz * bz
+            ix, iy, iz = _matvec(params, i + 1, bx, by, bz)
+            f = 3.0 * params[i] / (r2 * r2 * math.sqrt(r2))
+            m0, m1, m2 = f * (by * iz - bz * iy), f * (bz * ix - bx * iz), \
+                f * (bx * iy - by * ix)
+        elif kind == _CONSTANT_BODY:
+            m0, m1, m2 = params[i], params[i + 1], params[i + 2]
+        elif kind == _CONSTANT_INERTIAL:
+            m0, m1, m2 = _to_body(qx, qy, qz, qw, params[i], params[i + 1], params[i + 2])
+        elif kind == _HEAVY_TOP:                # m g (u_b x l)
+            ux, uy, uz = _to_body(qx, qy, qz, qw, params[i + 1], params[i + 2],
+                                  params[i + 3])
+            lx, ly, lz = params[i + 4], params[i + 5], params[i + 6]
+            mg = params[i]
+            m0, m1, m2 = mg * (uy * lz - uz * ly), mg * (uz * lx - ux * lz), \
+                mg * (ux * ly - uy * lx)
+        elif kind == _EDDY:                     # (M (w x B_b)) x B_b
+            fx, fy, fz = _field(params, i + 11, t)
+            bx, by, bz = _to_body(qx, qy, qz, qw, fx, fy, fz)
+            x0, x1, x2 = w1 * bz - w2 * by, w2 * bx - w0 * bz, w0 * by - w1 * bx
+            if params[i] != 0.0:
+                s = params[i + 1]
+                y0, y1, y2 = s * x0, s * x1, s * x2
+            else:
+                y0, y1, y2 = _matvec(params, i + 2, x0, x1, x2)
+            m0, m1, m2 = y1 * bz - y2 * by, y2 * bx - y0 * bz, y0 * by - y1 * bx
+        else:                                   # dissipation: -k w_perp (to L = I w)
+            Lx, Ly, Lz = _matvec(params, i + 1, w0, w1, w2)
+            L2 = Lx * Lx + Ly * Ly + Lz * Lz
+            if L2 == 0.0:
+                m0, m1, m2 = 0.0, 0.0, 0.0
+            else:
+                c = (w0 * Lx + w1 * Ly + w2 * Lz) / L2
+                p0, p1, p2 = w0 - c * Lx, w1 - c * Ly, w2 - c * Lz
+                c = (p0 * Lx + p1 * Ly + p2 * Lz) / L2     # re-project (round-off)
+                p0, p1, p2 = p0 - c * Lx, p1 - c * Ly, p2 - c * Lz
+                nk = -params[i]
+                m0, m1, m2 = nk * p0, nk * p1, nk * p2
+        out[0] += m0
+        out[1] += m1
+        out[2] += m2
+
+
+# --- layout -----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class CompiledTorques:
+    """Torque models laid out for :func:`body_torque` (read-only arrays).
+
+    Attributes
+    ----------
+    kinds : (n,) int64
+        Code of each term (:data:`TERM_KINDS`).
+    offsets : (n,) int64
+        Index in ``params`` where each term's numbers start.
+    params : (m,) float64
+        The numbers (see the module docstring for the layout).
+    names : tuple of str
+        The terms' kinds, by name.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import ConstantTorque, GravityGradient
+    >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
+    >>> c = compile_torques(GravityGradient(3.986004418e14, [7e6, 0.0, 0.0])
+    ...                     + ConstantTorque([0.0, 0.0, 1e-6]), body)
+    >>> c.names, c.offsets
+    (('gravity_gradient', 'constant_body'), array([ 0, 14]))
+    >>> c(0.0, [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0])
+    array([0.e+00, 0.e+00, 1.e-06])
+    """
+
+    kinds: np.ndarray
+    offsets: np.ndarray
+    params: np.ndarray
+    names: tuple
+
+    def __call__(self, t, quaternion, omega_body) -> np.ndarray:
+        """The torque (body frame, N m, ``(3,)``) at one time ``t`` (s), attitude
+        (body -> inertial, scalar-last) and rate (rad/s), through :func:`body_torque`."""
+        out = np.zeros(3)
+        body_torque(self.kinds, self.offsets, self.params, float(t),
+                    np.ascontiguousarray(quaternion, dtype=float),
+                    np.ascontiguousarray(omega_body, dtype=float), out)
+        return out
+
+    def __repr__(self) -> str:
+        return f"CompiledTorques({' + '.join(self.names) or 'nothing'}, numba={NUMBA})"
+
+
+def _vector(values, key: str, n: int) -> list[float]:
+    v = np.asarray(values[key], dtype=float).reshape(-1)
+    if v.shape != (n,):
+        raise ValueError(f"{key}: expected {n} numbers, got {v.shape}")
+    return v.tolist()
+
+
+def _source(obj, codes: dict, t_span) -> list[float] | None:
+    """The block of a path or field (``codes``: its kinds), or None without a compiled
+    form."""
+    describe = getattr(obj, "compiled_parameters", None)
+    if not callable(describe):
+        return None
+    part = describe(t_span)
+    if part is None or part[0] not in codes:
+        return None
+    kind, v = part
+    block = [float(codes[kind])]
+    if kind in ("fixed", "uniform"):
+        return block + _vector(v, "position" if kind == "fixed" else "vector", 3)
+    if kind == "kepler":
+        return block + [float(v[k]) for k in ("a", "e", "b", "mean_anomaly",
+                                              "mean_motion", "mu")] \
+            + _vector(v, "P", 3) + _vector(v, "Q", 3)
+    if kind == "tilted_dipole":
+        path = _source(v["orbit"], _PATHS, t_span)
+        if path is None:
+            return None
+        return block + [float(v[k]) for k in ("coefficient", "sin_tilt", "cos_tilt",
+                                              "rotation_angle", "rotation_rate",
+                                              "pole_longitude")] + path
+    x = np.asarray(v["breakpoints"], dtype=float)                 # piecewise cubic
+    c = np.asarray(v["coefficients"], dtype=float)
+    if x.ndim != 1 or c.shape != (4, x.size - 1, 3):
+        raise ValueError(f"piecewise cubic: expected breakpoints (N,) and coefficients "
+                         f"(4, N - 1, 3), got {x.shape} and {c.shape}")
+    return block + [float(x.size)] + x.tolist() + c.reshape(-1).tolist()
+
+
+def _term(kind: str, v: dict, t_span) -> list[float] | None:
+    """The numbers of one term, or None without a compiled form."""
+    if kind == "gravity_gradient":
+        path = _source(v["orbit"], _PATHS, t_span)
+        return None if path is None else [float(v["mu"])] + _vector(v, "inertia", 9) + path
+    if kind in ("constant_body", "constant_inertial"):
+        return _vector(v, "torque", 3)
+    if kind == "heavy_top":
+        return [float(v["mass_g"])] + _vector(v, "up", 3) + _vector(v, "pivot_to_com", 3)
+    if kind == "eddy_current":
+        field = _source(v["field"], _FIELDS, t_span)
+        if field is None:
+            return None
+        return [1.0 if v["isotropic"] else 0.0, float(v["scalar"])] \
+            + _vector(v, "tensor", 9) + field
+    if kind == "dissipation":
+        return [float(v["k"])] + _vector(v, "inertia", 9)
+    return None
+
+
+def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
+    """Lay out torque models for :func:`body_torque`, or None when one of them has no
+    compiled form.
+
+    Parameters
+    ----------
+    models : TorqueModel or sequence of them
+        Sums are taken apart; an empty sequence compiles to no term (zero torque).
+    body : RigidBody
+        The one body the torques act on (its inertia and mass enter the parameters).
+    t_span : (float, float), optional
+        The times (s since the epoch) the run covers: a tabulated path checks it
+        against its table.
+
+    Returns
+    -------
+    CompiledTorques or None
+        None if a model is a plain function, a :class:`~attitude.torques.FunctionTorque`,
+        a user's subclass, or reads a path or field without a compiled form (a
+        :class:`~attitude.orbit.CallablePath`, a user's field function): the caller
+        then calls the models in Python.
+
+    Raises
+    ------
+    InvalidStateError
+        If ``body`` is not one :class:`~attitude.body.RigidBody`.
+
+    Examples
+    --------
+    >>> from attitude import RigidBody
+    >>> from attitude.orbit import KeplerOrbit
+    >>> from attitude.torques import FunctionTorque, GravityGradient
+    >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
+    >>> orbit = KeplerOrbit(mu=3.986004418e14, a=7.0e6, e=0.01)
+    >>> compile_torques([GravityGradient(orbit=orbit)], body)
+    CompiledTorques(gravity_gradient, numba=...)
+    >>> compile_torques([FunctionTorque(lambda t, q, w, b: 0 * w)], body) is None
+    True
+    """
+    if not isinstance(body, RigidBody):
+        raise InvalidStateError(f"expected one RigidBody, got {type(body).__name__}",
+                                key="body")
+    if isinstance(models, TorqueModel) or not isinstance(models, Sequence):
+        models = [models]
+    names, kinds, offsets, params = [], [], [], []
+    for model in models:
+        if not isinstance(model, TorqueModel):
+            return None
+        parts = model.compiled_parameters(body, t_span)
+        if parts is None:
+            return None
+        for kind, values in parts:
+            numbers = _term(kind, values, t_span)
+            if numbers is None:
+                return None
+            names.append(kind)
+            kinds.append(TERM_KINDS[kind])
+            offsets.append(len(params))
+            params.extend(numbers)
+    arrays = [np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64),
+              np.array(params, dtype=np.float64)]
+    for a in arrays:
+        a.setflags(write=False)
+    return CompiledTorques(*arrays, tuple(names))

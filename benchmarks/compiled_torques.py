@@ -1,0 +1,84 @@
+"""Cost of one torque evaluation: the compiled kernel against the Python model call
+(issue 18: perturbed propagation at compiled speed).
+
+Gravity gradient of a satellite with a full inertia tensor on a Keplerian orbit (7000
+km, e = 0.01, i = 51.6 deg), and the same plus eddy currents in the tilted dipole: per
+call, the Python model (``model(t, q, w, body)``), ``body_torque`` called from Python
+(numba's dispatch included) and ``body_torque`` called from a compiled loop (what the
+compiled splitting loop pays).  Each row is the best of 5 repetitions.
+
+    python benchmarks/compiled_torques.py [--calls N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from _machine import cpu_name
+
+from attitude import RigidBody
+from attitude.orbit import KeplerOrbit
+from attitude.propagation.compiled_torques import NUMBA, body_torque, compile_torques
+from attitude.torques import EARTH_MU, EddyCurrentDamping, GravityGradient, TiltedDipoleField
+
+
+def best_ns(run, calls: int, repeat: int = 5) -> float:
+    """Best wall time per call over ``repeat`` runs of ``run()`` (``calls`` calls), ns."""
+    best = np.inf
+    for _ in range(repeat):
+        start = time.perf_counter()
+        run()
+        best = min(best, time.perf_counter() - start)
+    return best / calls * 1e9
+
+
+def main(calls: int) -> None:
+    body = RigidBody(np.array([[120.0, 4.0, -3.0], [4.0, 210.0, 6.0], [-3.0, 6.0, 260.0]]))
+    orbit = KeplerOrbit(mu=EARTH_MU, a=7.0e6, e=0.01, i=np.radians(51.6), raan=0.3,
+                        argp=1.1)
+    cases = {
+        "gravity gradient, Kepler orbit": GravityGradient(orbit=orbit),
+        "+ eddy currents, tilted dipole": GravityGradient(orbit=orbit) + EddyCurrentDamping(
+            np.diag([1e3, 2e3, 3e3]), TiltedDipoleField(orbit)),
+    }
+    rng = np.random.default_rng(0)
+    ts = rng.uniform(0.0, orbit.period, calls)
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w = np.array([5e-4, -1e-3, 1.1e-3])
+    out = np.empty(3)
+    loop = None
+    if NUMBA:
+        import numba  # optional: only to time the kernel inside a compiled loop
+
+        @numba.njit
+        def loop(kinds, offsets, params, ts, q, w, out):
+            for t in ts:
+                body_torque(kinds, offsets, params, t, q, w, out)
+
+    print(f"{cpu_name()}; numba: {NUMBA}; {calls} calls per run, best of 5\n")
+    print(f"{'case':34s} {'Python model':>14s} {'kernel from Py':>15s} "
+          f"{'kernel in loop':>15s} {'speed-up':>9s}")
+    for name, model in cases.items():
+        c = compile_torques(model, body)
+        kinds, offsets, params = c.kinds, c.offsets, c.params
+        n_py = max(calls // 20, 100)
+        python = best_ns(lambda: [model(t, q, w, body) for t in ts[:n_py]], n_py)
+        body_torque(kinds, offsets, params, 0.0, q, w, out)          # compile
+        from_py = best_ns(lambda: [body_torque(kinds, offsets, params, t, q, w, out)
+                                   for t in ts], calls)
+        in_loop = np.nan
+        if loop is not None:
+            loop(kinds, offsets, params, ts[:2], q, w, out)             # compile
+            in_loop = best_ns(lambda: loop(kinds, offsets, params, ts, q, w, out), calls)
+        fastest = np.nanmin([from_py, in_loop])
+        print(f"{name:34s} {python:11.0f} ns {from_py:12.0f} ns {in_loop:12.0f} ns "
+              f"{python / fastest:8.0f}x")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=200_000)
+    main(parser.parse_args().calls)

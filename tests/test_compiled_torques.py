@@ -1,0 +1,245 @@
+"""The compiled torque models (attitude.propagation.compiled_torques) against the models'
+own Python calls.
+
+The second method is the model itself: ``body_torque`` repeats each model's formulas in
+the same order of operations, so the two differ only where a library function rounds
+differently (numpy's SIMD ``sin``/``cos`` and ``dot`` against libm and a plain sum):
+:data:`tests.tolerances.TORQUE_EVAL` ulps of the scale of the terms, times what the
+time-dependent inputs amplify an ulp by (see :func:`_scale`).  Each comparison runs on
+the numba-compiled kernel, on its ``py_func`` (the loop in Python, calling the compiled
+helpers) and, in a subprocess with ``ATTITUDE_NO_NUMBA=1``, on the pure-Python fallback.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from attitude import RigidBody
+from attitude.errors import InvalidStateError, OrbitError, TorqueConfigError
+from attitude.orbit import CallablePath, KeplerOrbit, TabulatedPath
+from attitude.propagation import compiled_torques as ct
+from attitude.torques import (
+    EARTH_MU,
+    ConstantTorque,
+    EddyCurrentDamping,
+    EnergyDissipation,
+    FunctionTorque,
+    GravityGradient,
+    HeavyTopPivot,
+    TiltedDipoleField,
+    TorqueModel,
+    UniformField,
+)
+from tests.tolerances import TORQUE_EVAL, assert_agree
+
+#: A satellite with a full inertia tensor (kg m^2) and a mass (kg).
+BODY = RigidBody(np.array([[120.0, 4.0, -3.0], [4.0, 210.0, 6.0], [-3.0, 6.0, 260.0]]),
+                 mass=500.0)
+ORBIT = KeplerOrbit(mu=EARTH_MU, a=7.0e6, e=0.3, i=0.9, raan=0.3, argp=1.1,
+                    mean_anomaly=0.4)
+CIRCULAR = KeplerOrbit(mu=EARTH_MU, a=6.9e6, e=0.0, i=1.7, raan=-2.0)
+
+
+def _tabulated() -> TabulatedPath:
+    t = np.linspace(-100.0, 3 * ORBIT.period, 400)
+    return TabulatedPath(t, ORBIT.position(t))
+
+
+def _models():
+    """``name -> (model, scale(t, w))``: each model, and the scale of its terms at time
+    ``t`` and rate ``w`` (N m; the largest torque over attitudes, bounded by the
+    product of the factors' norms) times the amplification of an ulp by the time
+    dependence: a Kepler solve returns ``E`` within a few ulps of ``M``, times
+    ``dE/dM <= 1 / (1 - e)``; the dipole turns with ``lam`` (an ulp of ``lam``)."""
+    inertia = np.linalg.norm(BODY.inertia, 2)
+    kappa = np.linalg.cond(BODY.inertia)
+
+    def kepler(orbit, t):
+        return max(1.0, abs(orbit.mean_anomaly + orbit.mean_motion * t)) / (1.0 - orbit.e)
+
+    def gravity(orbit):
+        def scale(t, w):
+            r = np.linalg.norm(orbit.position(t))
+            return 3.0 * EARTH_MU / r**3 * inertia * kepler(orbit, t)
+        return scale
+
+    def eddy(tensor, field, orbit=None):
+        m = np.linalg.norm(np.atleast_2d(tensor), 2)
+
+        def scale(t, w):
+            b = np.linalg.norm(field(t))
+            amplify = 1.0 if orbit is None else 2.0 * max(
+                kepler(orbit, t), abs(field.rotation_angle + field.rotation_rate * t))
+            return m * np.linalg.norm(w) * b * b * amplify
+        return scale
+
+    dipole = TiltedDipoleField(ORBIT, rotation_angle=0.7)
+    uniform = UniformField([1.0e-5, -2.0e-5, 3.0e-5])
+    tensor = np.array([[3.0e3, 200.0, 0.0], [200.0, 1.0e3, -50.0], [0.0, -50.0, 2.0e3]])
+    damper = EnergyDissipation(300.0)
+    k = damper.coefficient(BODY)
+    top = HeavyTopPivot(pivot_to_com=[0.1, -0.2, 0.3], up=[0.2, 0.3, 1.0])
+    torque = np.array([1e-3, -2e-3, 5e-4])
+    return {
+        "gravity_gradient_kepler": (GravityGradient(orbit=ORBIT), gravity(ORBIT)),
+        "gravity_gradient_circular": (GravityGradient(orbit=CIRCULAR), gravity(CIRCULAR)),
+        "gravity_gradient_fixed": (GravityGradient(EARTH_MU, [4e6, -5e6, 2e6]),
+                                   lambda t, w: 3.0 * EARTH_MU / 6.7e6**3 * inertia),
+        "gravity_gradient_tabulated": (GravityGradient(EARTH_MU, _tabulated()),
+                                       gravity(ORBIT)),
+        "constant_body": (ConstantTorque(torque), lambda t, w: np.linalg.norm(torque)),
+        "constant_inertial": (ConstantTorque(torque, frame="inertial"),
+                              lambda t, w: np.linalg.norm(torque)),
+        "heavy_top": (top, lambda t, w: BODY.mass * top.g * np.linalg.norm(top.pivot_to_com)),
+        "eddy_uniform_isotropic": (EddyCurrentDamping(2.0e3, uniform),
+                                   eddy(2.0e3, uniform)),
+        "eddy_uniform_tensor": (EddyCurrentDamping(tensor, uniform), eddy(tensor, uniform)),
+        "eddy_dipole_kepler": (EddyCurrentDamping(tensor, dipole),
+                               eddy(tensor, dipole, ORBIT)),
+        "dissipation": (damper, lambda t, w: k * np.linalg.norm(w) * kappa),
+    }
+
+
+MODELS = _models()
+KERNELS = {"numba": ct.body_torque} if ct.NUMBA else {"python": ct.body_torque}
+if ct.NUMBA:
+    KERNELS["py_func"] = ct.body_torque.py_func
+
+
+def _states(seed: int, n: int = 40):
+    """Random times (within three periods of the eccentric orbit), attitudes (not
+    normalised: the models normalise) and rates up to ~0.5 rad/s."""
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0.0, 3 * ORBIT.period, n)
+    q = rng.normal(size=(n, 4)) * rng.uniform(0.5, 2.0, (n, 1))
+    w = rng.normal(size=(n, 3)) * 0.3
+    return t, q, w
+
+
+def check_model(name: str, kernel=ct.body_torque, seed: int = 0) -> None:
+    """The compiled ``name`` model against its Python call at random states."""
+    model, scale = MODELS[name]
+    c = ct.compile_torques([model], BODY, t_span=(0.0, 3 * ORBIT.period))
+    assert c is not None, name
+    out = np.full(3, np.nan)
+    for t, q, w in zip(*_states(seed), strict=True):
+        kernel(c.kinds, c.offsets, c.params, float(t), q, w, out)
+        assert_agree(out, model(t, q, w, BODY), ulps=TORQUE_EVAL, magnitude=scale(t, w),
+                     what=f"{name} at t = {t}")
+
+
+def check_all() -> None:
+    """Every model, and their sum, through :func:`body_torque` (as imported)."""
+    for name in MODELS:
+        check_model(name)
+    check_sum()
+
+
+def check_sum(kernel=ct.body_torque) -> None:
+    models = [m for m, _ in MODELS.values()]
+    c = ct.compile_torques(models, BODY, t_span=(0.0, 3 * ORBIT.period))
+    assert c.names[0] == "gravity_gradient" and len(c.names) == len(models)
+    out = np.empty(3)
+    for t, q, w in zip(*_states(7), strict=True):
+        kernel(c.kinds, c.offsets, c.params, float(t), q, w, out)
+        desired = sum(m(t, q, w, BODY) for m in models)
+        magnitude = sum(s(t, w) for _, s in MODELS.values())
+        assert_agree(out, desired, ulps=TORQUE_EVAL * len(models), magnitude=magnitude,
+                     what=f"sum at t = {t}")
+
+
+@pytest.mark.parametrize("kernel", list(KERNELS))
+@pytest.mark.parametrize("name", list(MODELS))
+def test_compiled_model_matches_python_call(name, kernel):
+    check_model(name, KERNELS[kernel], seed=list(MODELS).index(name))
+
+
+@pytest.mark.parametrize("kernel", list(KERNELS))
+def test_sum_of_all_models(kernel):
+    """A sum (with ``+`` or a list) is the terms one after another, as SumTorque adds."""
+    check_sum(KERNELS[kernel])
+    both = MODELS["gravity_gradient_kepler"][0] + MODELS["dissipation"][0]
+    assert ct.compile_torques(both, BODY).names == ("gravity_gradient", "dissipation")
+
+
+def test_pure_python_fallback_in_a_subprocess():
+    """With ``ATTITUDE_NO_NUMBA=1`` nothing is compiled and the same checks pass."""
+    code = ("import attitude.propagation.compiled_torques as ct; assert not ct.NUMBA; "
+            "import tests.test_compiled_torques as t; t.check_all()")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = {**os.environ, "ATTITUDE_NO_NUMBA": "1",
+           "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    run = subprocess.run([sys.executable, "-c", code], env=env, cwd=root,
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+
+
+def test_shifted_kepler_models_compile_and_agree():
+    """``shifted`` advances a Keplerian orbit (and the Earth's rotation): the compiled
+    shifted model is the shifted model's formulas."""
+    for name in ("gravity_gradient_kepler", "eddy_dipole_kepler"):
+        model, _ = MODELS[name]
+        later = model.shifted(1234.5)
+        c = ct.compile_torques(later, BODY)
+        t, q, w = _states(3, 5)
+        for k in range(5):
+            desired = later(t[k], q[k], w[k], BODY)
+            assert_agree(c(t[k], q[k], w[k]), desired, ulps=TORQUE_EVAL,
+                         magnitude=np.max(np.abs(desired)) * 10, what=name)
+
+
+def test_output_is_overwritten_not_accumulated():
+    c = ct.compile_torques([MODELS["constant_body"][0]], BODY)
+    out = np.array([1.0, 2.0, 3.0])
+    for _ in range(2):
+        ct.body_torque(c.kinds, c.offsets, c.params, 0.0, np.array([0, 0, 0, 1.0]),
+                       np.zeros(3), out)
+        np.testing.assert_array_equal(out, [1e-3, -2e-3, 5e-4])
+
+
+def test_no_models_is_zero_torque():
+    c = ct.compile_torques([], BODY)
+    assert c.names == () and c(10.0, [0, 0, 0, 1.0], [1.0, 2.0, 3.0]).tolist() == [0, 0, 0]
+
+
+class _UserModel(TorqueModel):
+    velocity_dependent = False
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        return np.zeros(3)
+
+
+@pytest.mark.parametrize("model", [
+    FunctionTorque(lambda t, q, w, b: -1e-3 * np.asarray(w)),
+    lambda t, q, w, b: np.zeros(3),
+    _UserModel(),
+    GravityGradient(EARTH_MU, CallablePath(lambda t: np.array([7e6, 0.0, 0.0]))),
+    EddyCurrentDamping(1.0, lambda t: np.array([0.0, 0.0, 3e-5])),
+    GravityGradient(EARTH_MU, _tabulated()).shifted(10.0),       # the generic wrapper
+], ids=["FunctionTorque", "function", "subclass", "CallablePath", "field function",
+        "shifted wrapper"])
+def test_models_without_compiled_form_give_none(model):
+    assert ct.compile_torques([ConstantTorque([0, 0, 1.0]), model], BODY) is None
+
+
+def test_errors():
+    with pytest.raises(InvalidStateError, match="body: expected one RigidBody"):
+        ct.compile_torques([], [BODY, BODY])
+    massless = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    with pytest.raises(TorqueConfigError, match="mass: the body has no mass"):
+        ct.compile_torques(HeavyTopPivot(pivot_to_com=[0, 0, 1.0]), massless)
+    with pytest.raises(OrbitError, match="outside the tabulated span"):
+        ct.compile_torques(GravityGradient(EARTH_MU, _tabulated()), BODY,
+                           t_span=(0.0, 10 * ORBIT.period))
+
+
+def test_layout_is_read_only():
+    c = ct.compile_torques(MODELS["eddy_dipole_kepler"][0], BODY)
+    assert c.kinds.dtype == np.int64 and c.params.dtype == np.float64
+    with pytest.raises(ValueError, match="read-only"):
+        c.params[0] = 1.0
