@@ -158,10 +158,11 @@ def test_lyapunov_restarts_use_the_models_shift():
     r_mine = lyapunov_exponent(body, state, [Recorded(gg)], 2000.0, **kw)
     r_fun = lyapunov_exponent(body, state, [lambda *a: gg(*a)], 2000.0, **kw)
     assert calls == [500.0, 1000.0, 1500.0]
-    # a delegating model (declared velocity-dependent) or a plain function is velocity-dependent for the integrator (another composition,
-    # RK kicks): it differs from the model by the truncation error of the default step,
-    # which moves this finite-time exponent by ~2e-6 relative (both against DOP853 at
-    # rtol 1e-13: 2.3e-6 and 1.3e-6), so agreement is asked to 1e-5
+    # a delegating model or a plain function is velocity-dependent for the integrator
+    # (another composition, RK kicks, the numpy path): each differs from the model by the
+    # truncation error of the default step, which moves this finite-time exponent by
+    # ~2e-6 relative (against DOP853 at rtol 1e-13: 2.3e-6 and 1.3e-6), so agreement
+    # with the reference is asked to 1e-5
     r_ref = lyapunov_exponent(body, state, [gg], 2000.0, intervals=4, control=None,
                               method="integrator")
     for r in (r_gg, r_mine, r_fun):

@@ -395,8 +395,9 @@ def _exact_blocks(bodies, states, times, block: int):
 
 
 def _splitting_blocks(bodies, states, times, block: int, torques, step, order):
-    """An Ephemeris per block: the splitting integrator restarted at the last epoch of
-    the previous block with the state reached there, with one step for the whole run."""
+    """An Ephemeris per block: the splitting integrator restarted at the last point of
+    the step grid that the previous block reached, with the state there, so that the
+    blocks take the steps of one run."""
     single = isinstance(bodies, RigidBody)
     first = states if single else states[0]
     q = np.stack([s.attitude.as_quat() for s in ([states] if single else states)])
@@ -419,11 +420,19 @@ def _splitting_blocks(bodies, states, times, block: int, torques, step, order):
             raise InvalidStateError(
                 f"times: a stream with torques runs forward from the state's epoch; the "
                 f"first time is {t[0]!r} s (give times >= 0)", key="times")
+        # the run's step grid goes on across blocks: each block also asks for the last
+        # grid time it reaches and the next block restarts there (outputs inside steps
+        # do not change the trajectory, so the blocks take the steps of one run)
+        grid = t_last
+        if t.size and step is not None and t[-1] > t_last:
+            grid = t_last + math.floor((t[-1] - t_last) / step) * step
+        run_t = np.append(t, grid) if grid > t_last else t
         qs, ws = integrate_splitting(bodies, q[0] if single else q, w[0] if single else w,
-                                     t, torques=torques, step=step, order=order, t0=t_last,
-                                     dense=False)
-        if t.size:
-            q, w, t_last = qs[..., -1, :], ws[..., -1, :], float(t[-1])
+                                     run_t, torques=torques, step=step, order=order,
+                                     t0=t_last)
+        if run_t.size > t.size:
+            q, w, t_last = qs[..., -1, :], ws[..., -1, :], float(grid)
+            qs, ws = qs[..., :-1, :], ws[..., :-1, :]
             if single:
                 q, w = q[None], w[None]
         yield Ephemeris.from_arrays(t, qs, ws, body=bodies, epoch=first.epoch,

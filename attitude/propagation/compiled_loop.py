@@ -322,10 +322,13 @@ def march_one(fc, torq, frame, moments, anchor, scheme, embedded, q0, w0, t0, ti
                 _any_kick(torq, frame, moments, anchor, t0 + t_next, qe, we, pe, cache, work,
                           rk_order)
                 cache[3] = 0.0
-                dq = 0.0
+                dq = 0.0                     # q and -q are one attitude
+                dqs = 0.0
                 dw = 0.0
                 for i in range(4):
                     dq += (qb[i] - qe[i]) ** 2
+                    dqs += (qb[i] + qe[i]) ** 2
+                dq = min(dq, dqs)
                 for i in range(3):
                     dw += (wb[i] - we[i]) ** 2
                 w1 = math.sqrt(wb[0] * wb[0] + wb[1] * wb[1] + wb[2] * wb[2])

@@ -1104,15 +1104,18 @@ class _Stepper:
 
 def _rtol_error(w0, q_hi, w_hi, q_lo, w_lo, rtol, w_floor) -> float:
     """Error of a trial step relative to ``rtol``: the larger of ``|dq|`` (the
-    quaternion has norm 1) and ``|dw| / max(|w|, |w'|, w_floor)``, over the bodies."""
-    dq = np.asarray(q_hi, dtype=float) - np.asarray(q_lo, dtype=float)
+    quaternion has norm 1; the nearer of ``q`` and ``-q``) and
+    ``|dw| / max(|w|, |w'|, w_floor)``, over the bodies."""
+    q_hi, q_lo = np.asarray(q_hi, dtype=float), np.asarray(q_lo, dtype=float)
+    # q and -q are one attitude: the nearer of the two
+    dq = np.minimum(np.sqrt(np.sum((q_hi - q_lo) ** 2, axis=-1)),
+                    np.sqrt(np.sum((q_hi + q_lo) ** 2, axis=-1)))
     dw = np.asarray(w_hi, dtype=float) - np.asarray(w_lo, dtype=float)
     w0 = np.asarray(w0, dtype=float)
     w1 = np.asarray(w_hi, dtype=float)
     scale = np.maximum(np.maximum(np.sqrt(np.sum(w0 * w0, axis=-1)),
                                   np.sqrt(np.sum(w1 * w1, axis=-1))), w_floor)
-    err = np.maximum(np.sqrt(np.sum(dq * dq, axis=-1)),
-                     np.sqrt(np.sum(dw * dw, axis=-1)) / scale)
+    err = np.maximum(dq, np.sqrt(np.sum(dw * dw, axis=-1)) / scale)
     return float(np.max(err)) / rtol
 
 
@@ -1230,8 +1233,9 @@ def _compiled_specs(system: _System, body_list, t0: float, t: np.ndarray, suppor
 
 
 def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step, mode,
-                  rtol, scheme, embedded, rk_order, w_floor, anchor, out_q, out_w):
-    """Each body through :func:`attitude.propagation.compiled_loop.march_one`."""
+                  rtol, scheme, embedded, rk_order, w_floor, anchor, out_q, out_w, bar):
+    """Each body through :func:`attitude.propagation.compiled_loop.march_one` (the
+    progress bar moves body by body and direction by direction)."""
     flags = (bool(system.kick_terms), bool(system.drag_terms), bool(system.internal_terms))
     coeffs = (np.array(scheme.b), np.array(scheme.a))
     emb = embedded if embedded is not None else scheme
@@ -1266,6 +1270,7 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, ste
                     "method='integrator'", key="rtol")
             out_q[i, idx] = oq
             out_w[i, idx] = ow
+            bar.update(abs(float(times[-1])) / len(specs))
 
 
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
@@ -1429,12 +1434,6 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     spin0 = float(np.max(np.sqrt(np.sum(w_p0 * w_p0, axis=1))))
     w_floor = 1e-3 * max(spin0, 1.0 / h_rule if math.isfinite(h_rule) else 0.0)
     w_floor = w_floor if w_floor > 0 else np.finfo(float).tiny
-    segments = _segments(t)
-    bar = _Progress(sum(float(np.max(np.abs(t[idx]))) for idx in segments), progress)
-
-    def store(j, q, w):
-        ops.store(out_q, out_w, j, q, w)
-
     specs = None
     torqued = has_kick or has_drag or has_internal
     if torqued and (compiled or (compiled is None and compiled_loop.NUMBA)):
@@ -1444,13 +1443,18 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                                     "Python function or model), or internal torques act "
                                     "together with external ones; use compiled=None",
                                     key="compiled")
-    if specs is not None:
-        _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step,
-                      mode, rtol, run_scheme, embedded, rk_order, w_floor, anchor,
-                      out_q, out_w)
-        segments = []
+    segments = _segments(t)
+    bar = _Progress(sum(float(np.max(np.abs(t[idx]))) for idx in segments), progress)
+
+    def store(j, q, w):
+        ops.store(out_q, out_w, j, q, w)
 
     try:
+        if specs is not None:
+            _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step,
+                          mode, rtol, run_scheme, embedded, rk_order, w_floor, anchor,
+                          out_q, out_w, bar)
+            segments = []
         for idx in segments:
             if n == 1:
                 q, w = tuple(q_p0[0].tolist()), tuple(w_p0[0].tolist())
