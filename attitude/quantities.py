@@ -268,8 +268,11 @@ def to_si(value, unit, *, key: str | None = None, shape=None, positive: bool = F
         except (ValueError, TypeError):
             raise error(f"cannot parse {value!r} as a quantity; write a number and a unit "
                         f"such as '{_hint(target)}'", key=key) from None
-    else:
-        q = _numbers(value, key, error, target) * target
+    else:                     # numbers are already in ``unit``: no conversion to do
+        out = np.array(_numbers(value, key, error, target), dtype=float)
+        _check(out, target, key, error, shape=shape, positive=positive,
+               nonnegative=nonnegative, finite=finite, bounds=bounds)
+        return float(out) if out.ndim == 0 else out
     source = _cycles(q.unit) if _is_angular(target) else q.unit
     try:
         out = (q.value * source).to_value(target, equivalencies=_equivalencies(target))
@@ -295,21 +298,20 @@ def _check(out, target, key, error, *, shape, positive, nonnegative, finite, bou
     if out.size == 0:
         raise error(f"expected at least one number (in {_u(target)}), got an empty list",
                     key=key)
-    show = _show(out, target)
     if finite and not np.all(np.isfinite(out)):
-        raise error(f"every value must be finite, got {show}", key=key)
+        raise error(f"every value must be finite, got {_show(out, target)}", key=key)
     if positive and not np.all(out > 0):
-        raise error(f"must be positive, got {show}", key=key)
+        raise error(f"must be positive, got {_show(out, target)}", key=key)
     if nonnegative and not np.all(out >= 0):
-        raise error(f"must be non-negative, got {show}", key=key)
+        raise error(f"must be non-negative, got {_show(out, target)}", key=key)
     if bounds is not None:
         low, high = bounds
         if (low is not None and not np.all(out >= low)) or (
                 high is not None and not np.all(out <= high)):
             lo = "-inf" if low is None else f"{low:g}"
             hi = "inf" if high is None else f"{high:g}"
-            raise error(f"must be within [{lo}, {hi}] {target}".rstrip() + f", got {show}",
-                        key=key)
+            raise error(f"must be within [{lo}, {hi}] {target}".rstrip()
+                        + f", got {_show(out, target)}", key=key)
 
 
 def _show(out: np.ndarray, target) -> str:
