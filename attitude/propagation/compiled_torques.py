@@ -74,9 +74,12 @@ __all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_K
 
 #: Codes of the terms in ``kinds``.
 TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
-              "heavy_top": 3, "eddy_current": 4, "dissipation": 5}
-_GRAVITY_GRADIENT, _CONSTANT_BODY, _CONSTANT_INERTIAL, _HEAVY_TOP, _EDDY, _DISSIPATION = \
-    range(6)
+              "heavy_top": 3, "eddy_current": 4, "dissipation": 5,
+              "radiation_pressure": 6, "drag": 7}
+(_GRAVITY_GRADIENT, _CONSTANT_BODY, _CONSTANT_INERTIAL, _HEAVY_TOP, _EDDY, _DISSIPATION,
+ _RADIATION, _DRAG) = range(8)
+#: Codes of the shadow models of radiation pressure.
+_SHADOWS = {None: 0.0, "conical": 1.0, "cylindrical": 2.0}
 #: Codes of the paths (first number of a path block).
 _PATHS = {"fixed": 0, "kepler": 1, "piecewise_cubic": 2}
 _FIXED, _KEPLER, _PIECEWISE = 0.0, 1.0, 2.0
@@ -150,6 +153,157 @@ def _piecewise(params, i, t):
     out2 = ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride]) \
         * d + params[j + 2 + 3 * stride]
     return out0, out1, out2
+
+
+@_jit
+def _piecewise_rate(params, i, t):
+    """The time derivative of the piecewise cubic block at ``params[i]`` at ``t``."""
+    nb = int(params[i])
+    x0 = i + 1
+    n = nb - 1
+    lo, hi = 0, n - 1
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if params[x0 + mid] <= t:
+            lo = mid
+        else:
+            hi = mid - 1
+    d = t - params[x0 + lo]
+    stride = 3 * n
+    j = x0 + nb + 3 * lo
+    return ((3.0 * params[j] * d + 2.0 * params[j + stride]) * d + params[j + 2 * stride],
+            (3.0 * params[j + 1] * d + 2.0 * params[j + 1 + stride]) * d
+            + params[j + 1 + 2 * stride],
+            (3.0 * params[j + 2] * d + 2.0 * params[j + 2 + stride]) * d
+            + params[j + 2 + 2 * stride])
+
+
+@_jit
+def _velocity(params, i, t):
+    """The path block at ``params[i]`` at ``t``: inertial velocity, m/s (Kepler:
+    ``v = sqrt(mu a) / r (-sin E P + b cos E Q)``; a table: its derivative)."""
+    kind = params[i]
+    if kind == _FIXED:
+        return 0.0, 0.0, 0.0
+    if kind == _KEPLER:
+        a, e, b = params[i + 1], params[i + 2], params[i + 3]
+        M = params[i + 4] + params[i + 5] * t
+        E = M if e == 0.0 else _eccentric_anomaly(M, e)
+        cE, sE = math.cos(E), math.sin(E)
+        f = math.sqrt(params[i + 6] * a) / (a * (1.0 - e * cE))
+        bc = b * cE
+        return (f * (-sE * params[i + 7] + bc * params[i + 10]),
+                f * (-sE * params[i + 8] + bc * params[i + 11]),
+                f * (-sE * params[i + 9] + bc * params[i + 12]))
+    return _piecewise_rate(params, i + 1, t)
+
+
+@_jit
+def _illumination(x, y, z, sx, sy, sz, model, earth_radius, sun_radius):
+    """Visible fraction of the solar disk (:func:`attitude.environment.illumination`,
+    one epoch, the same formulas): ``model`` 1 conical, 2 cylindrical."""
+    if model == 2.0:
+        d_sun = math.sqrt(sx * sx + sy * sy + sz * sz)
+        along = (x * sx + y * sy + z * sz) / d_sun
+        across2 = max(x * x + y * y + z * z - along * along, 0.0)
+        return 0.0 if (along < 0 and math.sqrt(across2) < earth_radius) else 1.0
+    tx, ty, tz = sx - x, sy - y, sz - z
+    d_sun = math.sqrt(tx * tx + ty * ty + tz * tz)
+    d_earth = math.sqrt(x * x + y * y + z * z)
+    a = math.asin(sun_radius / d_sun)
+    b = math.asin(min(max(earth_radius / d_earth, -1.0), 1.0))
+    cos_c = -(x * tx + y * ty + z * tz) / (d_earth * d_sun)
+    c = math.acos(min(max(cos_c, -1.0), 1.0))
+    if c >= a + b:
+        return 1.0
+    if c <= b - a:
+        return 0.0
+    if c <= a - b:
+        return 1.0 - (b * b) / (a * a)
+    u = (c * c + a * a - b * b) / (2 * c)
+    v = math.sqrt(max(a * a - u * u, 0.0))
+    lens = (a * a * math.acos(min(max(u / a, -1.0), 1.0))
+            + b * b * math.acos(min(max((c - u) / b, -1.0), 1.0)) - c * v)
+    return min(max(1.0 - lens / (math.pi * a * a), 0.0), 1.0)
+
+
+@_jit
+def _radiation(params, i, t, qx, qy, qz, qw):
+    """Solar radiation pressure (:class:`attitude.environment.SolarRadiationPressure`):
+    ``-P [(sum_k w_k r_k) x s + 2 sum_k u_k (r_k x n_k)]``."""
+    t = t + params[i]
+    n = int(params[i + 6])
+    sun = i + int(params[i + 7])
+    sx, sy, sz = _position(params, sun, t)
+    x, y, z = _position(params, i + int(params[i + 8]), t)
+    dx, dy, dz = sx - x, sy - y, sz - z
+    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+    ratio = params[i + 2] / dist
+    p = params[i + 1] * (ratio * ratio)
+    if params[i + 3] != 0.0:
+        p *= _illumination(x, y, z, sx, sy, sz, params[i + 3], params[i + 4], params[i + 5])
+    if p == 0.0:
+        return 0.0, 0.0, 0.0
+    s0, s1, s2 = _to_body(qx, qy, qz, qw, dx / dist, dy / dist, dz / dist)
+    normals = i + 9
+    r = normals + 3 * n
+    rxn = r + 3 * n
+    one_minus_s = rxn + 3 * n
+    spec = one_minus_s + n
+    diff = spec + n
+    W0 = W1 = W2 = U0 = U1 = U2 = 0.0
+    for k in range(n):
+        c = (params[normals + 3 * k] * s0 + params[normals + 3 * k + 1] * s1
+             + params[normals + 3 * k + 2] * s2)
+        if c > 0.0:
+            w = c * params[one_minus_s + k]
+            u = c * (c * params[spec + k] + params[diff + k])
+            W0 += w * params[r + 3 * k]
+            W1 += w * params[r + 3 * k + 1]
+            W2 += w * params[r + 3 * k + 2]
+            U0 += u * params[rxn + 3 * k]
+            U1 += u * params[rxn + 3 * k + 1]
+            U2 += u * params[rxn + 3 * k + 2]
+    return (-p * ((W1 * s2 - W2 * s1) + 2.0 * U0), -p * ((W2 * s0 - W0 * s2) + 2.0 * U1),
+            -p * ((W0 * s1 - W1 * s0) + 2.0 * U2))
+
+
+@_jit
+def _drag(params, i, t, qx, qy, qz, qw):
+    """Free-molecular drag (:class:`attitude.environment.AerodynamicDrag`):
+    ``-1/2 rho v^2 C_D (sum_k A_k c_k r_k) x v_hat``, the air co-rotating."""
+    t = t + params[i]
+    layers, n = int(params[i + 5]), int(params[i + 6])
+    orbit = i + int(params[i + 7])
+    x, y, z = _position(params, orbit, t)
+    vx, vy, vz = _velocity(params, orbit, t)
+    if params[i + 2] != 0.0:
+        rate = params[i + 3]
+        vx, vy = vx + rate * y, vy - rate * x
+    h = math.sqrt(x * x + y * y + z * z) - params[i + 4]
+    bases = i + 8
+    k = 0                              # the last layer whose base is <= h (or the first)
+    while k + 1 < layers and params[bases + k + 1] <= h:
+        k += 1
+    rho = params[bases + layers + k] * math.exp(-(h - params[bases + k])
+                                                / params[bases + 2 * layers + k])
+    v2 = vx * vx + vy * vy + vz * vz
+    if v2 == 0.0 or rho == 0.0:
+        return 0.0, 0.0, 0.0
+    speed = math.sqrt(v2)
+    v0, v1, v2h = _to_body(qx, qy, qz, qw, vx / speed, vy / speed, vz / speed)
+    normals = bases + 3 * layers
+    ar = normals + 3 * n
+    S0 = S1 = S2 = 0.0
+    for j in range(n):
+        c = (params[normals + 3 * j] * v0 + params[normals + 3 * j + 1] * v1
+             + params[normals + 3 * j + 2] * v2h)
+        if c > 0.0:
+            S0 += c * params[ar + 3 * j]
+            S1 += c * params[ar + 3 * j + 1]
+            S2 += c * params[ar + 3 * j + 2]
+    f = -0.5 * rho * v2 * params[i + 1]
+    return f * (S1 * v2h - S2 * v1), f * (S2 * v0 - S0 * v2h), f * (S0 * v1 - S1 * v0)
 
 
 @_jit
@@ -285,6 +439,10 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
             else:
                 y0, y1, y2 = _matvec(params, i + 2, x0, x1, x2)
             m0, m1, m2 = y1 * bz - y2 * by, y2 * bx - y0 * bz, y0 * by - y1 * bx
+        elif kind == _RADIATION:
+            m0, m1, m2 = _radiation(params, i, t, qx, qy, qz, qw)
+        elif kind == _DRAG:
+            m0, m1, m2 = _drag(params, i, t, qx, qy, qz, qw)
         else:                                   # dissipation: -k w_perp (to L = I w)
             Lx, Ly, Lz = _matvec(params, i + 1, w0, w1, w2)
             L2 = Lx * Lx + Ly * Ly + Lz * Lz
@@ -408,6 +566,29 @@ def _term(kind: str, v: dict, t_span) -> list[float] | None:
             + _vector(v, "tensor", 9) + field
     if kind == "dissipation":
         return [float(v["k"])] + _vector(v, "inertia", 9)
+    if kind == "radiation_pressure":
+        sun, orbit = _source(v["sun"], _PATHS, t_span), _source(v["orbit"], _PATHS, t_span)
+        if sun is None or orbit is None or v["shadow"] not in _SHADOWS:
+            return None
+        n = len(v["one_minus_s"])
+        facets = [x for key, size in (("normals", 3), ("r", 3), ("rxn", 3),
+                                      ("one_minus_s", 1), ("spec", 1), ("diff", 1))
+                  for x in _vector(v, key, size * n)]
+        head = 9 + len(facets)
+        return [float(v["time_offset"]), float(v["pressure"]), float(v["astronomical_unit"]),
+                _SHADOWS[v["shadow"]], float(v["earth_radius"]), float(v["sun_radius"]),
+                float(n), float(head), float(head + len(sun))] + facets + sun + orbit
+    if kind == "drag":
+        orbit = _source(v["orbit"], _PATHS, t_span)
+        if orbit is None or v["orbit"] is None:
+            return None
+        layers, n = len(v["bases"]), len(v["ar"])
+        table = [x for key in ("bases", "densities", "scale_heights")
+                 for x in _vector(v, key, layers)]
+        facets = _vector(v, "normals", 3 * n) + _vector(v, "ar", 3 * n)
+        return [float(v["time_offset"]), float(v["cd"]), 1.0 if v["corotation"] else 0.0,
+                float(v["rotation_rate"]), float(v["earth_radius"]), float(layers), float(n),
+                float(8 + len(table) + len(facets))] + table + facets + orbit
     return None
 
 
