@@ -325,3 +325,15 @@ def test_radiation_pressure_through_the_penumbra():
         q, w = rng.normal(size=4), np.zeros(3)
         assert_agree(c(x, q, w), model(x, q, w, BODY), ulps=TORQUE_EVAL,
                      magnitude=scale(x, w), what=f"penumbra at t = {x}")
+
+
+def test_a_path_read_by_several_terms_is_stored_once():
+    """Gravity gradient and the dipole field on one orbit share its block (13 numbers)."""
+    gg, eddy = MODELS["gravity_gradient_kepler"][0], MODELS["eddy_dipole_kepler"][0]
+    apart = [ct.compile_torques(m, BODY).params.size for m in (gg, eddy)]
+    assert ct.compile_torques([gg, eddy], BODY).params.size == sum(apart) - 13
+
+
+def test_tabulated_paths_need_the_time_span():
+    assert ct.compile_torques(MODELS["gravity_gradient_tle"][0], BODY) is None
+    assert ct.compile_torques(MODELS["gravity_gradient_tabulated"][0], BODY) is not None

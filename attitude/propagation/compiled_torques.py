@@ -3,30 +3,49 @@
 A torque model is a Python object; calling it costs microseconds of dispatch, more
 than the physics.  :func:`compile_torques` asks each model for its compiled form
 (:meth:`attitude.torques.TorqueModel.compiled_parameters`: the formula's name, its SI
-parameters and the paths or fields it reads) and lays the models out in three flat
-arrays, ``kinds`` (one formula per term), ``offsets`` (where each term's numbers start)
-and ``params`` (all the numbers); :func:`body_torque` evaluates their sum at one time,
-attitude and rate with the same formulas as the models' ``__call__``, in the same order
-of operations, so that the two agree to round-off.
+parameters and the paths or fields it reads, each with a ``compiled_parameters`` of its
+own) and lays the models out in three flat arrays, ``kinds`` (one formula per term),
+``offsets`` (where each term's numbers start) and ``params`` (all the numbers);
+:func:`body_torque` evaluates their sum at one time, attitude and rate with the same
+formulas as the models' ``__call__``, in the same order of operations, so that the two
+agree to round-off.
 
-========================  ==============================================================
-term                      ``params`` from ``offsets[k]``
-========================  ==============================================================
-``gravity_gradient``      ``mu``, inertia (9, row-major), path
-``constant_body``         torque (3)
-``constant_inertial``     torque (3)
-``heavy_top``             ``m g``, up (3), pivot -> centre of mass (3)
-``eddy_current``          isotropic (0 or 1), scalar, tensor (9), field
-``dissipation``           ``k``, inertia (9)
-========================  ==============================================================
+==========================  =============================================================
+term                        numbers from ``offsets[k]``
+==========================  =============================================================
+``gravity_gradient``        ``mu``, inertia (9, row-major), path
+``constant_body``           torque (3)
+``constant_inertial``       torque (3)
+``heavy_top``               ``m g``, up (3), pivot -> centre of mass (3)
+``eddy_current``            isotropic (0 or 1), scalar, tensor (9), field
+``dissipation``             ``k``, inertia (9)
+``radiation_pressure``      time offset, pressure at 1 au, au, shadow (0 none, 1 conical,
+                            2 cylindrical), Earth and Sun radii, facets ``n``, Sun's path,
+                            body's path, normals (3n), ``r`` (3n), ``r x n`` (3n),
+                            ``A (1 - rho_s)``, ``A rho_s``, ``A rho_d / 3`` (n each)
+``drag``                    time offset, ``C_D``, co-rotation (0 or 1), Earth rotation
+                            rate and radius, layers ``L``, facets ``n``, path, base
+                            altitudes, densities, scale heights (L each), normals (3n),
+                            ``A r`` (3n)
+==========================  =============================================================
 
-A path is ``kind`` then its numbers: ``fixed`` (0: position), ``kepler`` (1: ``a, e,
-b = sqrt(1 - e^2), M0, n, mu, P (3), Q (3)``, Kepler's equation solved as
-:func:`attitude.orbit.solve_kepler`), ``piecewise_cubic`` (2: the number of breakpoints,
-the breakpoints, the coefficients ``(4, intervals, 3)`` highest power first).  A field is
-``uniform`` (0: vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and cosine of the
-tilt, rotation angle, rate, pole longitude, then the orbit's path) or ``piecewise_cubic``
-(2, as a path).
+A path or a field entry is the index of its block in ``params``; each path or field is
+stored once however many terms read it.  A path block is its kind then its numbers:
+``fixed`` (0: position), ``kepler`` (1: ``a, e, b = sqrt(1 - e^2), M0, n, mu, P (3),
+Q (3)``, Kepler's equation solved as :func:`attitude.orbit.solve_kepler`),
+``piecewise_cubic`` (2: the number ``N`` of breakpoints, the breakpoints, the
+coefficients ``(4, N - 1, 3)`` highest power first).  A field block is ``uniform`` (0:
+vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and cosine of the tilt, rotation
+angle, rate, pole longitude, the index of the orbit's path) or ``piecewise_cubic`` (2, as
+a path).
+
+Tabulated paths and fields (:class:`~attitude.orbit.TabulatedPath`,
+:class:`~attitude.environment.TLEOrbit`, :class:`~attitude.environment.SunPath`,
+:class:`~attitude.environment.IGRF`) hand over their own interpolating cubics over the
+run's ``t_span`` (the segments of :class:`~attitude.environment.TimeTable` that cover
+it; a ``TabulatedPath`` its whole spline), so the compiled path adds no interpolation
+error of its own: it evaluates the polynomials the Python path evaluates.  Without
+``t_span`` the environment's tables have no compiled form.
 
 numba is optional: without it (or with ``ATTITUDE_NO_NUMBA=1``) the same functions run as
 plain Python, slowly but with the same results.  A model without a compiled form (a
@@ -233,9 +252,8 @@ def _radiation(params, i, t, qx, qy, qz, qw):
     ``-P [(sum_k w_k r_k) x s + 2 sum_k u_k (r_k x n_k)]``."""
     t = t + params[i]
     n = int(params[i + 6])
-    sun = i + int(params[i + 7])
-    sx, sy, sz = _position(params, sun, t)
-    x, y, z = _position(params, i + int(params[i + 8]), t)
+    sx, sy, sz = _position(params, int(params[i + 7]), t)
+    x, y, z = _position(params, int(params[i + 8]), t)
     dx, dy, dz = sx - x, sy - y, sz - z
     dist = math.sqrt(dx * dx + dy * dy + dz * dz)
     ratio = params[i + 2] / dist
@@ -274,7 +292,7 @@ def _drag(params, i, t, qx, qy, qz, qw):
     ``-1/2 rho v^2 C_D (sum_k A_k c_k r_k) x v_hat``, the air co-rotating."""
     t = t + params[i]
     layers, n = int(params[i + 5]), int(params[i + 6])
-    orbit = i + int(params[i + 7])
+    orbit = int(params[i + 7])
     x, y, z = _position(params, orbit, t)
     vx, vy, vz = _velocity(params, orbit, t)
     if params[i + 2] != 0.0:
@@ -338,7 +356,7 @@ def _field(params, i, t):
         coefficient, st, ct = params[i + 1], params[i + 2], params[i + 3]
         lam = (params[i + 4] + params[i + 5] * t) + params[i + 6]
         mx, my, mz = -(st * math.cos(lam)), -(st * math.sin(lam)), -ct
-        rx, ry, rz = _position(params, i + 7, t)
+        rx, ry, rz = _position(params, int(params[i + 7]), t)
         r2 = rx * rx + ry * ry + rz * rz
         rn = math.sqrt(r2)
         hx, hy, hz = rx / rn, ry / rn, rz / rn
@@ -411,7 +429,7 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
         kind = kinds[k]
         i = offsets[k]
         if kind == _GRAVITY_GRADIENT:           # 3 mu / r^5 (r_b x I r_b)
-            rx, ry, rz = _position(params, i + 10, t)
+            rx, ry, rz = _position(params, int(params[i + 10]), t)
             bx, by, bz = _to_body(qx, qy, qz, qw, rx, ry, rz)
             r2 = bx * bx + by * by + bz * bz
             ix, iy, iz = _matvec(params, i + 1, bx, by, bz)
@@ -430,7 +448,7 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
             m0, m1, m2 = mg * (uy * lz - uz * ly), mg * (uz * lx - ux * lz), \
                 mg * (ux * ly - uy * lx)
         elif kind == _EDDY:                     # (M (w x B_b)) x B_b
-            fx, fy, fz = _field(params, i + 11, t)
+            fx, fy, fz = _field(params, int(params[i + 11]), t)
             bx, by, bz = _to_body(qx, qy, qz, qw, fx, fy, fz)
             x0, x1, x2 = w1 * bz - w2 * by, w2 * bx - w0 * bz, w0 * by - w1 * bx
             if params[i] != 0.0:
@@ -486,8 +504,8 @@ class CompiledTorques:
     >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
     >>> c = compile_torques(GravityGradient(3.986004418e14, [7e6, 0.0, 0.0])
     ...                     + ConstantTorque([0.0, 0.0, 1e-6]), body)
-    >>> c.names, c.offsets
-    (('gravity_gradient', 'constant_body'), array([ 0, 14]))
+    >>> c.names, c.offsets        # the position's block (4 numbers) comes first
+    (('gravity_gradient', 'constant_body'), array([ 4, 15]))
     >>> c(0.0, [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0])
     array([0.e+00, 0.e+00, 1.e-06])
     """
@@ -510,86 +528,111 @@ class CompiledTorques:
         return f"CompiledTorques({' + '.join(self.names) or 'nothing'}, numba={NUMBA})"
 
 
-def _vector(values, key: str, n: int) -> list[float]:
+def _vector(values, key: str, n: int) -> np.ndarray:
     v = np.asarray(values[key], dtype=float).reshape(-1)
     if v.shape != (n,):
         raise ValueError(f"{key}: expected {n} numbers, got {v.shape}")
-    return v.tolist()
+    return v
 
 
-def _source(obj, codes: dict, t_span) -> list[float] | None:
-    """The block of a path or field (``codes``: its kinds), or None without a compiled
-    form."""
-    describe = getattr(obj, "compiled_parameters", None)
-    if not callable(describe):
+class _Layout:
+    """``params`` being built: blocks appended in order; each path or field stored once
+    however many terms read it (a year of a tabulated orbit is ~10^7 numbers)."""
+
+    def __init__(self, t_span):
+        self.t_span = t_span
+        self.blocks: list[np.ndarray] = []
+        self.size = 0
+        self._sources: dict[int, tuple] = {}       # id -> (object, index or None)
+
+    def add(self, *parts) -> int:
+        """Append ``parts`` (numbers or arrays) as one block; its index in ``params``."""
+        block = np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in parts])
+        self.blocks.append(block)
+        self.size += block.size
+        return self.size - block.size
+
+    def source(self, obj, codes: dict) -> int | None:
+        """Index of the block of a path or field (``codes``: its kinds), or None without
+        a compiled form."""
+        known = self._sources.get(id(obj))
+        if known is not None and known[0] is obj:
+            return known[1]
+        index = self._encode(obj, codes)
+        self._sources[id(obj)] = (obj, index)
+        return index
+
+    def _encode(self, obj, codes: dict) -> int | None:
+        describe = getattr(obj, "compiled_parameters", None)
+        if not callable(describe):
+            return None
+        part = describe(self.t_span)
+        if part is None or part[0] not in codes:
+            return None
+        kind, v = part
+        code = float(codes[kind])
+        if kind in ("fixed", "uniform"):
+            return self.add(code, _vector(v, "position" if kind == "fixed" else "vector", 3))
+        if kind == "kepler":
+            return self.add(code, [float(v[k]) for k in ("a", "e", "b", "mean_anomaly",
+                                                         "mean_motion", "mu")],
+                            _vector(v, "P", 3), _vector(v, "Q", 3))
+        if kind == "tilted_dipole":
+            path = self.source(v["orbit"], _PATHS)
+            if path is None:
+                return None
+            return self.add(code, [float(v[k]) for k in (
+                "coefficient", "sin_tilt", "cos_tilt", "rotation_angle", "rotation_rate",
+                "pole_longitude")], float(path))
+        x = np.asarray(v["breakpoints"], dtype=float)                 # piecewise cubic
+        c = np.asarray(v["coefficients"], dtype=float)
+        if x.ndim != 1 or x.size < 2 or c.shape != (4, x.size - 1, 3):
+            raise ValueError(f"piecewise cubic: expected breakpoints (N,) and coefficients "
+                             f"(4, N - 1, 3), got {x.shape} and {c.shape}")
+        return self.add(code, float(x.size), x, c)
+
+    def term(self, kind: str, v: dict) -> int | None:
+        """Append the numbers of one term; their index, or None without a compiled form."""
+        if kind == "gravity_gradient":
+            path = self.source(v["orbit"], _PATHS)
+            return None if path is None else self.add(
+                float(v["mu"]), _vector(v, "inertia", 9), float(path))
+        if kind in ("constant_body", "constant_inertial"):
+            return self.add(_vector(v, "torque", 3))
+        if kind == "heavy_top":
+            return self.add(float(v["mass_g"]), _vector(v, "up", 3),
+                            _vector(v, "pivot_to_com", 3))
+        if kind == "eddy_current":
+            field = self.source(v["field"], _FIELDS)
+            return None if field is None else self.add(
+                1.0 if v["isotropic"] else 0.0, float(v["scalar"]), _vector(v, "tensor", 9),
+                float(field))
+        if kind == "dissipation":
+            return self.add(float(v["k"]), _vector(v, "inertia", 9))
+        if kind == "radiation_pressure":
+            sun, orbit = self.source(v["sun"], _PATHS), self.source(v["orbit"], _PATHS)
+            if sun is None or orbit is None or v["shadow"] not in _SHADOWS:
+                return None
+            n = len(v["one_minus_s"])
+            return self.add(float(v["time_offset"]), float(v["pressure"]),
+                            float(v["astronomical_unit"]), _SHADOWS[v["shadow"]],
+                            float(v["earth_radius"]), float(v["sun_radius"]), float(n),
+                            float(sun), float(orbit),
+                            *(_vector(v, key, size * n) for key, size in (
+                                ("normals", 3), ("r", 3), ("rxn", 3), ("one_minus_s", 1),
+                                ("spec", 1), ("diff", 1))))
+        if kind == "drag":
+            orbit = self.source(v["orbit"], _PATHS)
+            if orbit is None:
+                return None
+            layers, n = len(v["bases"]), len(v["ar"])
+            return self.add(float(v["time_offset"]), float(v["cd"]),
+                            1.0 if v["corotation"] else 0.0, float(v["rotation_rate"]),
+                            float(v["earth_radius"]), float(layers), float(n), float(orbit),
+                            *(_vector(v, key, layers) for key in (
+                                "bases", "densities", "scale_heights")),
+                            _vector(v, "normals", 3 * n), _vector(v, "ar", 3 * n))
         return None
-    part = describe(t_span)
-    if part is None or part[0] not in codes:
-        return None
-    kind, v = part
-    block = [float(codes[kind])]
-    if kind in ("fixed", "uniform"):
-        return block + _vector(v, "position" if kind == "fixed" else "vector", 3)
-    if kind == "kepler":
-        return block + [float(v[k]) for k in ("a", "e", "b", "mean_anomaly",
-                                              "mean_motion", "mu")] \
-            + _vector(v, "P", 3) + _vector(v, "Q", 3)
-    if kind == "tilted_dipole":
-        path = _source(v["orbit"], _PATHS, t_span)
-        if path is None:
-            return None
-        return block + [float(v[k]) for k in ("coefficient", "sin_tilt", "cos_tilt",
-                                              "rotation_angle", "rotation_rate",
-                                              "pole_longitude")] + path
-    x = np.asarray(v["breakpoints"], dtype=float)                 # piecewise cubic
-    c = np.asarray(v["coefficients"], dtype=float)
-    if x.ndim != 1 or c.shape != (4, x.size - 1, 3):
-        raise ValueError(f"piecewise cubic: expected breakpoints (N,) and coefficients "
-                         f"(4, N - 1, 3), got {x.shape} and {c.shape}")
-    return block + [float(x.size)] + x.tolist() + c.reshape(-1).tolist()
-
-
-def _term(kind: str, v: dict, t_span) -> list[float] | None:
-    """The numbers of one term, or None without a compiled form."""
-    if kind == "gravity_gradient":
-        path = _source(v["orbit"], _PATHS, t_span)
-        return None if path is None else [float(v["mu"])] + _vector(v, "inertia", 9) + path
-    if kind in ("constant_body", "constant_inertial"):
-        return _vector(v, "torque", 3)
-    if kind == "heavy_top":
-        return [float(v["mass_g"])] + _vector(v, "up", 3) + _vector(v, "pivot_to_com", 3)
-    if kind == "eddy_current":
-        field = _source(v["field"], _FIELDS, t_span)
-        if field is None:
-            return None
-        return [1.0 if v["isotropic"] else 0.0, float(v["scalar"])] \
-            + _vector(v, "tensor", 9) + field
-    if kind == "dissipation":
-        return [float(v["k"])] + _vector(v, "inertia", 9)
-    if kind == "radiation_pressure":
-        sun, orbit = _source(v["sun"], _PATHS, t_span), _source(v["orbit"], _PATHS, t_span)
-        if sun is None or orbit is None or v["shadow"] not in _SHADOWS:
-            return None
-        n = len(v["one_minus_s"])
-        facets = [x for key, size in (("normals", 3), ("r", 3), ("rxn", 3),
-                                      ("one_minus_s", 1), ("spec", 1), ("diff", 1))
-                  for x in _vector(v, key, size * n)]
-        head = 9 + len(facets)
-        return [float(v["time_offset"]), float(v["pressure"]), float(v["astronomical_unit"]),
-                _SHADOWS[v["shadow"]], float(v["earth_radius"]), float(v["sun_radius"]),
-                float(n), float(head), float(head + len(sun))] + facets + sun + orbit
-    if kind == "drag":
-        orbit = _source(v["orbit"], _PATHS, t_span)
-        if orbit is None or v["orbit"] is None:
-            return None
-        layers, n = len(v["bases"]), len(v["ar"])
-        table = [x for key in ("bases", "densities", "scale_heights")
-                 for x in _vector(v, key, layers)]
-        facets = _vector(v, "normals", 3 * n) + _vector(v, "ar", 3 * n)
-        return [float(v["time_offset"]), float(v["cd"]), 1.0 if v["corotation"] else 0.0,
-                float(v["rotation_rate"]), float(v["earth_radius"]), float(layers), float(n),
-                float(8 + len(table) + len(facets))] + table + facets + orbit
-    return None
 
 
 def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
@@ -603,16 +646,20 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
     body : RigidBody
         The one body the torques act on (its inertia and mass enter the parameters).
     t_span : (float, float), optional
-        The times (s since the epoch) the run covers: a tabulated path checks it
-        against its table.
+        The times (s since the epoch) the run covers.  The environment's tabulated
+        paths and fields (a TLE orbit, the Sun, IGRF) hand over their cubics over it, so
+        they need it (without it they have no compiled form); a
+        :class:`~attitude.orbit.TabulatedPath` hands over its whole spline and checks
+        ``t_span`` against its table.
 
     Returns
     -------
     CompiledTorques or None
         None if a model is a plain function, a :class:`~attitude.torques.FunctionTorque`,
-        a user's subclass, or reads a path or field without a compiled form (a
-        :class:`~attitude.orbit.CallablePath`, a user's field function): the caller
-        then calls the models in Python.
+        a user's subclass (or the generic wrapper of ``shifted`` around one of the
+        models whose ``shifted`` has no form of its own), or reads a path or field
+        without a compiled form (a :class:`~attitude.orbit.CallablePath`, a user's field
+        function, a density function): the caller then calls the models in Python.
 
     Raises
     ------
@@ -636,7 +683,8 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
                                 key="body")
     if isinstance(models, TorqueModel) or not isinstance(models, Sequence):
         models = [models]
-    names, kinds, offsets, params = [], [], [], []
+    layout = _Layout(t_span)
+    names, kinds, offsets = [], [], []
     for model in models:
         if not isinstance(model, TorqueModel):
             return None
@@ -644,15 +692,14 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
         if parts is None:
             return None
         for kind, values in parts:
-            numbers = _term(kind, values, t_span)
-            if numbers is None:
+            index = layout.term(kind, values)
+            if index is None:
                 return None
             names.append(kind)
             kinds.append(TERM_KINDS[kind])
-            offsets.append(len(params))
-            params.extend(numbers)
-    arrays = [np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64),
-              np.array(params, dtype=np.float64)]
+            offsets.append(index)
+    params = np.concatenate(layout.blocks) if layout.blocks else np.zeros(0)
+    arrays = [np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64), params]
     for a in arrays:
         a.setflags(write=False)
     return CompiledTorques(*arrays, tuple(names))
