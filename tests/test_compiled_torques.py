@@ -337,3 +337,26 @@ def test_a_path_read_by_several_terms_is_stored_once():
 def test_tabulated_paths_need_the_time_span():
     assert ct.compile_torques(MODELS["gravity_gradient_tle"][0], BODY) is None
     assert ct.compile_torques(MODELS["gravity_gradient_tabulated"][0], BODY) is not None
+
+
+def test_tables_at_breakpoints_and_segment_ends():
+    """The interval lookup (an index on a uniform grid, bisection otherwise) at
+    breakpoints, just beside them and across a TimeTable segment end, on the same
+    cubics as the Python path: a TLE orbit tabulated every second (segments of 4320 s)
+    and a path sampled at uneven times."""
+    tle = TLEOrbit(*ISS, spacing=1.0)
+    rng = np.random.default_rng(9)
+    uneven = np.sort(rng.uniform(0.0, 3000.0, 300))
+    cases = [(GravityGradient(EARTH_MU, tle), (4000.0, 4700.0),
+              [4320.0, np.nextafter(4320.0, 0), np.nextafter(4320.0, 1e9), 4319.0, 4321.0,
+               4000.0, 4700.0, 4500.5]),
+             (GravityGradient(EARTH_MU, TabulatedPath(uneven, ORBIT.position(uneven))),
+              (uneven[0], uneven[-1]), list(uneven[::7]) + [uneven[-1], uneven[0]])]
+    inertia = np.linalg.norm(BODY.inertia, 2)
+    for model, span, times in cases:
+        c = ct.compile_torques(model, BODY, t_span=span)
+        for t in times:
+            q, w = rng.normal(size=4), np.zeros(3)
+            scale = 3.0 * EARTH_MU / np.linalg.norm(model.orbit.position(t)) ** 3 * inertia
+            assert_agree(c(t, q, w), model(t, q, w, BODY), ulps=TORQUE_EVAL,
+                         magnitude=scale, what=f"{model.orbit!r} at t = {t!r}")

@@ -33,11 +33,11 @@ A path or a field entry is the index of its block in ``params``; each path or fi
 stored once however many terms read it.  A path block is its kind then its numbers:
 ``fixed`` (0: position), ``kepler`` (1: ``a, e, b = sqrt(1 - e^2), M0, n, mu, P (3),
 Q (3)``, Kepler's equation solved as :func:`attitude.orbit.solve_kepler`),
-``piecewise_cubic`` (2: the number ``N`` of breakpoints, the breakpoints, the
-coefficients ``(4, N - 1, 3)`` highest power first).  A field block is ``uniform`` (0:
-vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and cosine of the tilt, rotation
-angle, rate, pole longitude, the index of the orbit's path) or ``piecewise_cubic`` (2, as
-a path).
+``piecewise_cubic`` (2: the number ``N`` of breakpoints, their spacing if uniform else
+0, the breakpoints, the coefficients ``(4, N - 1, 3)`` highest power first).  A field
+block is ``uniform`` (0: vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and
+cosine of the tilt, rotation angle, rate, pole longitude, the index of the orbit's path)
+or ``piecewise_cubic`` (2, as a path).
 
 Tabulated paths and fields (:class:`~attitude.orbit.TabulatedPath`,
 :class:`~attitude.environment.TLEOrbit`, :class:`~attitude.environment.SunPath`,
@@ -147,49 +147,50 @@ def _eccentric_anomaly(M, e):
 
 
 @_jit
-def _piecewise(params, i, t):
-    """A piecewise cubic block at ``params[i]`` (number of breakpoints, breakpoints,
-    coefficients ``(4, intervals, 3)``) at ``t``: the interval whose left end is the last
-    breakpoint <= t (the end intervals extrapolate, as scipy's ``PPoly``), Horner's rule."""
+def _interval(params, i, t):
+    """The interval of the piecewise cubic block at ``params[i]`` (number ``N`` of
+    breakpoints, spacing ``h`` if uniform else 0, breakpoints, coefficients) holding
+    ``t``: the last breakpoint <= t (the end intervals extrapolate, as scipy's ``PPoly``).
+    Returns the index of its first coefficient, the stride between powers and ``t`` minus
+    its breakpoint."""
     nb = int(params[i])
-    x0 = i + 1
-    c0 = x0 + nb
+    h = params[i + 1]
+    x0 = i + 2
     n = nb - 1
-    lo, hi = 0, n - 1                     # bisection for the interval
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if params[x0 + mid] <= t:
-            lo = mid
-        else:
-            hi = mid - 1
-    d = t - params[x0 + lo]
-    stride = 3 * n
-    j = c0 + 3 * lo
-    out0 = ((params[j] * d + params[j + stride]) * d + params[j + 2 * stride]) * d \
-        + params[j + 3 * stride]
-    out1 = ((params[j + 1] * d + params[j + 1 + stride]) * d + params[j + 1 + 2 * stride]) \
-        * d + params[j + 1 + 3 * stride]
-    out2 = ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride]) \
-        * d + params[j + 2 + 3 * stride]
-    return out0, out1, out2
+    if h > 0.0:                           # uniform: start from the index, then step
+        j = int(min(max((t - params[x0]) / h, 0.0), n - 1.0))
+        while j < n - 1 and params[x0 + j + 1] <= t:
+            j += 1
+        while j > 0 and params[x0 + j] > t:
+            j -= 1
+    else:                                 # bisection
+        j, hi = 0, n - 1
+        while j < hi:
+            mid = (j + hi + 1) // 2
+            if params[x0 + mid] <= t:
+                j = mid
+            else:
+                hi = mid - 1
+    return x0 + nb + 3 * j, 3 * n, t - params[x0 + j]
+
+
+@_jit
+def _piecewise(params, i, t):
+    """The piecewise cubic block at ``params[i]`` at ``t``, Horner's rule (as
+    :class:`attitude.environment.TimeTable`)."""
+    j, stride, d = _interval(params, i, t)
+    return (((params[j] * d + params[j + stride]) * d + params[j + 2 * stride]) * d
+            + params[j + 3 * stride],
+            ((params[j + 1] * d + params[j + 1 + stride]) * d + params[j + 1 + 2 * stride])
+            * d + params[j + 1 + 3 * stride],
+            ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride])
+            * d + params[j + 2 + 3 * stride])
 
 
 @_jit
 def _piecewise_rate(params, i, t):
     """The time derivative of the piecewise cubic block at ``params[i]`` at ``t``."""
-    nb = int(params[i])
-    x0 = i + 1
-    n = nb - 1
-    lo, hi = 0, n - 1
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if params[x0 + mid] <= t:
-            lo = mid
-        else:
-            hi = mid - 1
-    d = t - params[x0 + lo]
-    stride = 3 * n
-    j = x0 + nb + 3 * lo
+    j, stride, d = _interval(params, i, t)
     return ((3.0 * params[j] * d + 2.0 * params[j + stride]) * d + params[j + 2 * stride],
             (3.0 * params[j + 1] * d + 2.0 * params[j + 1 + stride]) * d
             + params[j + 1 + 2 * stride],
@@ -589,7 +590,9 @@ class _Layout:
         if x.ndim != 1 or x.size < 2 or c.shape != (4, x.size - 1, 3):
             raise ValueError(f"piecewise cubic: expected breakpoints (N,) and coefficients "
                              f"(4, N - 1, 3), got {x.shape} and {c.shape}")
-        return self.add(code, float(x.size), x, c)
+        h = (x[-1] - x[0]) / (x.size - 1)
+        uniform = np.all(np.abs(np.diff(x) - h) <= 1e-9 * h)   # start lookups by index
+        return self.add(code, float(x.size), h if uniform else 0.0, x, c)
 
     def term(self, kind: str, v: dict) -> int | None:
         """Append the numbers of one term; their index, or None without a compiled form."""
