@@ -259,6 +259,20 @@ def test_shifted_kepler_models_compile_and_agree():
                          magnitude=np.max(np.abs(desired)) * 10, what=name)
 
 
+def test_shifted_wrappers_read_their_terms_later():
+    """``shifted`` on a tabulated path (the generic wrapper, ``inner(t + dt)``) and on an
+    environment torque (its time offset): the compiled terms read the same times."""
+    for name in ("gravity_gradient_tabulated", "gravity_gradient_tle", "drag_tle_shifted"):
+        model, scale = MODELS[name]
+        later = model.shifted(321.25)
+        c = ct.compile_torques([later], BODY, t_span=(0.0, 2 * ORBIT.period))
+        assert c.params[c.offsets[0]] == (321.25 if name != "drag_tle_shifted" else 0.0)
+        for t, q, w in zip(*_states(13, 10), strict=True):
+            t = t * 2 / 3
+            assert_agree(c(t, q, w), later(t, q, w, BODY), ulps=TORQUE_EVAL,
+                         magnitude=scale(t + 321.25, w), what=f"{name} shifted, t = {t}")
+
+
 def test_output_is_overwritten_not_accumulated():
     c = ct.compile_torques([MODELS["constant_body"][0]], BODY)
     out = np.array([1.0, 2.0, 3.0])
@@ -286,9 +300,9 @@ class _UserModel(TorqueModel):
     _UserModel(),
     GravityGradient(EARTH_MU, CallablePath(lambda t: np.array([7e6, 0.0, 0.0]))),
     EddyCurrentDamping(1.0, lambda t: np.array([0.0, 0.0, 3e-5])),
-    GravityGradient(EARTH_MU, _tabulated()).shifted(10.0),       # the generic wrapper
+    _UserModel().shifted(10.0),                                   # the generic wrapper
 ], ids=["FunctionTorque", "function", "subclass", "CallablePath", "field function",
-        "shifted wrapper"])
+        "shifted subclass"])
 def test_models_without_compiled_form_give_none(model):
     assert ct.compile_torques([ConstantTorque([0, 0, 1.0]), model], BODY) is None
 

@@ -11,7 +11,7 @@ formulas as the models' ``__call__``, in the same order of operations, so that t
 agree to round-off.
 
 ==========================  =============================================================
-term                        numbers from ``offsets[k]``
+term                        numbers from ``offsets[k] + 1``
 ==========================  =============================================================
 ``gravity_gradient``        ``mu``, inertia (9, row-major), path
 ``constant_body``           torque (3)
@@ -29,7 +29,9 @@ term                        numbers from ``offsets[k]``
                             ``A r`` (3n)
 ==========================  =============================================================
 
-A path or a field entry is the index of its block in ``params``; each path or field is
+Each term's numbers start with its time shift, ``params[offsets[k]]`` (the term is read
+at ``t`` plus it, 0 but for a model wrapped by ``shifted``).  A path or a field entry is
+the index of its block in ``params``; each path or field is
 stored once however many terms read it.  A path block is its kind then its numbers:
 ``fixed`` (0: position), ``kepler`` (1: ``a, e, b = sqrt(1 - e^2), M0, n, mu, P (3),
 Q (3)``, Kepler's equation solved as :func:`attitude.orbit.solve_kepler`),
@@ -389,7 +391,7 @@ def _matvec(params, i, x, y, z):
 
 
 @_jit
-def body_torque(kinds, offsets, params, t, q_b, w_b, out):
+def body_torque(kinds, offsets, params, t0, q_b, w_b, out):
     """Sum of the compiled torque models, body frame, N m, written into ``out``.
 
     Parameters
@@ -398,7 +400,7 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
         Term codes and where each term's numbers start in ``params``
         (:class:`CompiledTorques`).
     params : (m,) float64 array
-    t : float
+    t0 : float
         Seconds since the run's epoch (the models' time).
     q_b : (4,) float64 array
         Attitude, body -> inertial, scalar-last (normalised here, as the models do).
@@ -428,7 +430,8 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
     out[2] = 0.0
     for k in range(kinds.shape[0]):
         kind = kinds[k]
-        i = offsets[k]
+        t = t0 + params[offsets[k]]             # the term's time shift
+        i = offsets[k] + 1
         if kind == _GRAVITY_GRADIENT:           # 3 mu / r^5 (r_b x I r_b)
             rx, ry, rz = _position(params, int(params[i + 10]), t)
             bx, by, bz = _to_body(qx, qy, qz, qw, rx, ry, rz)
@@ -595,46 +598,56 @@ class _Layout:
         return self.add(code, float(x.size), h if uniform else 0.0, x, c)
 
     def term(self, kind: str, v: dict) -> int | None:
-        """Append the numbers of one term; their index, or None without a compiled form."""
+        """Append the numbers of one term, its time shift first; their index, or None
+        without a compiled form."""
+        numbers = self._term(kind, v)
+        if numbers is None:
+            return None
+        return self.add(float(v.get("time_shift", 0.0)), *numbers)
+
+    def _term(self, kind: str, v: dict) -> tuple | None:
+        """The numbers of one term (after its time shift), or None."""
         if kind == "gravity_gradient":
             path = self.source(v["orbit"], _PATHS)
-            return None if path is None else self.add(
-                float(v["mu"]), _vector(v, "inertia", 9), float(path))
+            if path is None:
+                return None
+            return float(v["mu"]), _vector(v, "inertia", 9), float(path)
         if kind in ("constant_body", "constant_inertial"):
-            return self.add(_vector(v, "torque", 3))
+            return (_vector(v, "torque", 3),)
         if kind == "heavy_top":
-            return self.add(float(v["mass_g"]), _vector(v, "up", 3),
-                            _vector(v, "pivot_to_com", 3))
+            return float(v["mass_g"]), _vector(v, "up", 3), _vector(v, "pivot_to_com", 3)
         if kind == "eddy_current":
             field = self.source(v["field"], _FIELDS)
-            return None if field is None else self.add(
-                1.0 if v["isotropic"] else 0.0, float(v["scalar"]), _vector(v, "tensor", 9),
-                float(field))
+            if field is None:
+                return None
+            return (1.0 if v["isotropic"] else 0.0, float(v["scalar"]),
+                    _vector(v, "tensor", 9), float(field))
         if kind == "dissipation":
-            return self.add(float(v["k"]), _vector(v, "inertia", 9))
+            return float(v["k"]), _vector(v, "inertia", 9)
         if kind == "radiation_pressure":
             sun, orbit = self.source(v["sun"], _PATHS), self.source(v["orbit"], _PATHS)
             if sun is None or orbit is None or v["shadow"] not in _SHADOWS:
                 return None
             n = len(v["one_minus_s"])
-            return self.add(float(v["time_offset"]), float(v["pressure"]),
-                            float(v["astronomical_unit"]), _SHADOWS[v["shadow"]],
-                            float(v["earth_radius"]), float(v["sun_radius"]), float(n),
-                            float(sun), float(orbit),
-                            *(_vector(v, key, size * n) for key, size in (
-                                ("normals", 3), ("r", 3), ("rxn", 3), ("one_minus_s", 1),
-                                ("spec", 1), ("diff", 1))))
+            facets = tuple(_vector(v, key, size * n) for key, size in (
+                ("normals", 3), ("r", 3), ("rxn", 3), ("one_minus_s", 1), ("spec", 1),
+                ("diff", 1)))
+            return (float(v["time_offset"]), float(v["pressure"]),
+                    float(v["astronomical_unit"]), _SHADOWS[v["shadow"]],
+                    float(v["earth_radius"]), float(v["sun_radius"]), float(n),
+                    float(sun), float(orbit)) + facets
         if kind == "drag":
             orbit = self.source(v["orbit"], _PATHS)
             if orbit is None:
                 return None
             layers, n = len(v["bases"]), len(v["ar"])
-            return self.add(float(v["time_offset"]), float(v["cd"]),
-                            1.0 if v["corotation"] else 0.0, float(v["rotation_rate"]),
-                            float(v["earth_radius"]), float(layers), float(n), float(orbit),
-                            *(_vector(v, key, layers) for key in (
-                                "bases", "densities", "scale_heights")),
-                            _vector(v, "normals", 3 * n), _vector(v, "ar", 3 * n))
+            table = tuple(_vector(v, key, layers)
+                          for key in ("bases", "densities", "scale_heights"))
+            return (float(v["time_offset"]), float(v["cd"]),
+                    1.0 if v["corotation"] else 0.0, float(v["rotation_rate"]),
+                    float(v["earth_radius"]), float(layers), float(n),
+                    float(orbit)) + table + (_vector(v, "normals", 3 * n),
+                                             _vector(v, "ar", 3 * n))
         return None
 
 
