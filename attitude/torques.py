@@ -557,7 +557,8 @@ class _ShiftedTorque(TorqueModel):
         >>> t = np.linspace(0.0, 100.0, 11)
         >>> gg = GravityGradient(3.986e14, TabulatedPath(t, np.stack([7e6 + t, 0 * t, 0 * t],
         ...                                                          axis=-1)))
-        >>> gg.shifted(5.0).compiled_parameters(None, (0.0, 90.0))[0][1]["time_shift"]
+        >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> gg.shifted(5.0).compiled_parameters(body, (0.0, 90.0))[0][1]["time_shift"]
         5.0
         """
         span = None if t_span is None else (t_span[0] + self.dt, t_span[1] + self.dt)

@@ -509,7 +509,7 @@ class CompiledTorques:
     >>> c = compile_torques(GravityGradient(3.986004418e14, [7e6, 0.0, 0.0])
     ...                     + ConstantTorque([0.0, 0.0, 1e-6]), body)
     >>> c.names, c.offsets        # the position's block (4 numbers) comes first
-    (('gravity_gradient', 'constant_body'), array([ 4, 15]))
+    (('gravity_gradient', 'constant_body'), array([ 4, 16]))
     >>> c(0.0, [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0])
     array([0.e+00, 0.e+00, 1.e-06])
     """
