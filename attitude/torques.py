@@ -1378,9 +1378,10 @@ class EddyCurrentDamping(TorqueModel):
         return super().shifted(dt)
 
     def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
-        """``[("eddy_current", {tensor, field})]`` (``tensor`` 3 x 3, the isotropic
-        scalar times the identity), or None when the field has no compiled form (a
-        user's function) (:meth:`TorqueModel.compiled_parameters`).
+        """``[("eddy_current", {isotropic, scalar, tensor, field})]`` (``tensor`` 3 x 3,
+        the isotropic ``scalar`` times the identity when ``isotropic``), or None when the
+        field has no compiled form (a user's function)
+        (:meth:`TorqueModel.compiled_parameters`).
 
         Examples
         --------
