@@ -369,9 +369,11 @@ class TorqueModel:
         A list of ``(kind, values)`` terms, one per elementary model, whose sum is this
         model's torque on ``body`` (one body): ``kind`` names the formula, ``values``
         holds its SI parameters and the paths or fields it reads (objects with their own
-        ``compiled_parameters``).  :func:`attitude.propagation.compiled_torques.compile_torques`
-        lays them out in flat arrays; ``t_span = (t0, t1)`` (s) is the time the run
-        covers, which a tabulated path needs.
+        ``compiled_parameters``), and optionally ``time_shift`` (s: the term is read at
+        ``t + time_shift``, what :meth:`shifted` wraps).
+        :func:`attitude.propagation.compiled_torques.compile_torques` lays them out in
+        flat arrays; ``t_span = (t0, t1)`` (s) is the time the run covers, which a
+        tabulated path needs.
 
         Examples
         --------
@@ -544,6 +546,27 @@ class _ShiftedTorque(TorqueModel):
     def shifted(self, dt: float) -> TorqueModel:
         dt = float(dt)
         return self if dt == 0.0 else _ShiftedTorque(self.inner, self.dt + dt)
+
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
+        """The inner model's terms, each read at ``t + dt`` (``time_shift``), its paths
+        over the shifted span; None if the inner model has no compiled form.
+
+        Examples
+        --------
+        >>> from attitude.orbit import TabulatedPath
+        >>> t = np.linspace(0.0, 100.0, 11)
+        >>> gg = GravityGradient(3.986e14, TabulatedPath(t, np.stack([7e6 + t, 0 * t, 0 * t],
+        ...                                                          axis=-1)))
+        >>> body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+        >>> gg.shifted(5.0).compiled_parameters(body, (0.0, 90.0))[0][1]["time_shift"]
+        5.0
+        """
+        span = None if t_span is None else (t_span[0] + self.dt, t_span[1] + self.dt)
+        parts = self.inner.compiled_parameters(body, span)
+        if parts is None:
+            return None
+        return [(kind, {**values, "time_shift": values.get("time_shift", 0.0) + self.dt})
+                for kind, values in parts]
 
     def __repr__(self) -> str:
         return f"{self.inner!r} at t + {self.dt:.9g} s"
@@ -1355,9 +1378,10 @@ class EddyCurrentDamping(TorqueModel):
         return super().shifted(dt)
 
     def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
-        """``[("eddy_current", {tensor, field})]`` (``tensor`` 3 x 3, the isotropic
-        scalar times the identity), or None when the field has no compiled form (a
-        user's function) (:meth:`TorqueModel.compiled_parameters`).
+        """``[("eddy_current", {isotropic, scalar, tensor, field})]`` (``tensor`` 3 x 3,
+        the isotropic ``scalar`` times the identity when ``isotropic``), or None when the
+        field has no compiled form (a user's function)
+        (:meth:`TorqueModel.compiled_parameters`).
 
         Examples
         --------

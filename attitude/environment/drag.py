@@ -254,6 +254,34 @@ class AerodynamicDrag(EnvironmentTorque):
         np.maximum(c, 0.0, out=c)
         return (-0.5 * rho * v2 * self.cd) * cross(c @ self._ar, v_hat)
 
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
+        """``[("drag", {...})]``: the terms of the one-epoch evaluation (facet sums, drag
+        coefficient, co-rotation, the layers of an :class:`ExponentialAtmosphere`, the
+        orbit, the time offset) for a compiled kernel, or None with another density
+        model (:meth:`attitude.torques.TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude.environment import AerodynamicDrag, Facets
+        >>> from attitude.orbit import KeplerOrbit
+        >>> leo = KeplerOrbit(mu=3.986004418e14, a=6.8e6)
+        >>> drag = AerodynamicDrag(Facets.box([1.0, 1.0, 2.0]), leo)
+        >>> drag.compiled_parameters(None)[0][1]["bases"][:2]
+        array([    0., 25000.])
+        >>> AerodynamicDrag(Facets.box([1.0, 1.0, 2.0]), leo, density=lambda h: 1e-12
+        ...                 ).compiled_parameters(None) is None
+        True
+        """
+        atmosphere = self.density
+        if not isinstance(atmosphere, ExponentialAtmosphere):
+            return None
+        return [("drag", {
+            "time_offset": float(self.time_offset), "cd": float(self.cd),
+            "corotation": self.corotation, "rotation_rate": EARTH_ROTATION_RATE,
+            "earth_radius": EARTH_RADIUS, "bases": atmosphere._base.copy(),
+            "densities": atmosphere._rho.copy(), "scale_heights": atmosphere._scale.copy(),
+            "normals": self._normals.copy(), "ar": self._ar.copy(), "orbit": self.orbit})]
+
     def force(self, t, quaternion) -> np.ndarray:
         """Total drag force, body frame, N, shape ``broadcast + (3,)``."""
         qn = np.asarray(quaternion, dtype=float)

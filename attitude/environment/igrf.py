@@ -141,6 +141,24 @@ class IGRF:
                                               for b in (b_r, b_t, b_p)))
         return np.einsum("nji,nj->ni", m, b_ef) * 1e-9
 
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict] | None:
+        """``("piecewise_cubic", {breakpoints, coefficients})``: the tabulated field over
+        ``t_span = (t0, t1)`` (s) for a compiled kernel, or None without a span.
+
+        Examples
+        --------
+        >>> from astropy.time import Time
+        >>> from attitude.orbit import KeplerOrbit
+        >>> leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6871 km", i="51.6 deg")
+        >>> field = IGRF(leo, epoch=Time("2024-03-01T00:00:00", scale="utc"), max_degree=1)
+        >>> field.compiled_parameters((0.0, 60.0))[0]
+        'piecewise_cubic'
+        """
+        if t_span is None:
+            return None
+        x, c = self._table.piecewise(*t_span)
+        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+
     def __call__(self, t) -> np.ndarray:
         """Field at the body at ``t`` (s after the epoch), inertial, T, ``t.shape + (3,)``."""
         return self._table(t)

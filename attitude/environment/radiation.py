@@ -47,7 +47,7 @@ from ..orbit import as_path
 from ..quantities import to_si
 from ..quaternion import cross
 from .facets import Facets, as_facets
-from .sun import SHADOW_MODELS, illumination
+from .sun import EARTH_RADIUS, SHADOW_MODELS, SUN_RADIUS, illumination
 from .torquebase import EnvironmentTorque, check_vector
 
 __all__ = ["SolarRadiationPressure", "SOLAR_PRESSURE_1AU", "ASTRONOMICAL_UNIT"]
@@ -176,6 +176,28 @@ class SolarRadiationPressure(EnvironmentTorque):
         w = c * self._one_minus_s
         u = c * (c * self._spec + self._diff)
         return -p * (cross(w @ self._r, s) + 2.0 * (u @ self._rxn))
+
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]]:
+        """``[("radiation_pressure", {...})]``: the terms of the one-epoch evaluation
+        (facet sums, pressure, shadow model, the Sun's and the body's paths, the time
+        offset) for a compiled kernel (:meth:`attitude.torques.TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude.environment import Facets
+        >>> srp = SolarRadiationPressure(Facets.plate(1.0, [1.0, 0, 0]), sun=[1.5e11, 0, 0],
+        ...                              orbit=[7e6, 0, 0])
+        >>> kind, values = srp.compiled_parameters(None)[0]
+        >>> kind, values["shadow"], values["normals"].shape
+        ('radiation_pressure', 'conical', (2, 3))
+        """
+        return [("radiation_pressure", {
+            "time_offset": float(self.time_offset), "pressure": float(self.pressure),
+            "astronomical_unit": ASTRONOMICAL_UNIT, "shadow": self.shadow,
+            "earth_radius": EARTH_RADIUS, "sun_radius": SUN_RADIUS,
+            "normals": self._normals.copy(), "r": self._r.copy(), "rxn": self._rxn.copy(),
+            "one_minus_s": self._one_minus_s.copy(), "spec": self._spec.copy(),
+            "diff": self._diff.copy(), "sun": self.sun, "orbit": self.orbit})]
 
     def force(self, t, quaternion) -> np.ndarray:
         """Total radiation force, body frame, N, shape ``broadcast + (3,)``.

@@ -72,6 +72,22 @@ class SunPath:
             xyz = np.einsum("nij,nj->ni", gcrf_to_frame(self.frame, times), xyz)
         return xyz
 
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict] | None:
+        """``("piecewise_cubic", {breakpoints, coefficients})``: the tabulated path over
+        ``t_span = (t0, t1)`` (s) for a compiled kernel, or None without a span.
+
+        Examples
+        --------
+        >>> from astropy.time import Time
+        >>> sun = SunPath(Time("2024-03-20T03:06:00", scale="utc"))
+        >>> sun.compiled_parameters((0.0, 3600.0))[1]["breakpoints"].shape
+        (49,)
+        """
+        if t_span is None:
+            return None
+        x, c = self._table.piecewise(*t_span)
+        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+
     def position(self, t) -> np.ndarray:
         """Geocentric position of the Sun at ``t`` (s), inertial, m, ``t.shape + (3,)``."""
         return self._table(t)

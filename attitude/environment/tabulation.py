@@ -75,6 +75,28 @@ class TimeTable:
             self._splines[k] = spline
         return spline
 
+    def piecewise(self, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
+        """The interpolant over ``[t0, t1]`` as one piecewise cubic: the breakpoints
+        ``(N,)`` of the segments that cover the span and the coefficients ``(4, N - 1,
+        k)`` (highest power first, in powers of ``t - breakpoint``), the segments'
+        own (a compiled kernel evaluates them with the Horner rule of :meth:`__call__`).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> table = TimeTable(lambda t: np.stack([t, t * t], axis=-1), spacing=10.0,
+        ...                   segment=40.0)
+        >>> x, c = table.piecewise(5.0, 50.0)      # segments [0, 40] and [40, 80]
+        >>> x.tolist(), c.shape
+        ([0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0], (4, 8, 2))
+        """
+        if not (np.isfinite(t0) and np.isfinite(t1) and t0 <= t1):
+            raise ValueError(f"expected finite times t0 <= t1, got {t0}, {t1}")
+        first, last = int(np.floor(t0 / self.segment)), int(np.floor(t1 / self.segment))
+        splines = [self._spline(k) for k in range(first, last + 1)]
+        x = np.concatenate([s.x[:-1] for s in splines] + [splines[-1].x[-1:]])
+        return x, np.concatenate([s.c for s in splines], axis=1)
+
     def _horner(self, k: int, x: float, nu: int) -> np.ndarray:
         """The spline of segment ``k`` (or its derivative) at one time: the cubic of the
         node interval by Horner's rule (scipy's ``PPoly.__call__`` costs ~20 us)."""

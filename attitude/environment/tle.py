@@ -150,6 +150,24 @@ class TLEOrbit:
         """Orbital period from the mean motion, s."""
         return 2 * np.pi / self.mean_motion
 
+    def compiled_parameters(self, t_span=None) -> tuple[str, dict] | None:
+        """``("piecewise_cubic", {breakpoints, coefficients})``: the tabulated orbit over
+        ``t_span = (t0, t1)`` (s) for a compiled kernel (:meth:`TimeTable.piecewise`), or
+        None without a span.
+
+        Examples
+        --------
+        >>> l1 = "1 25544U 98067A   24061.50000000  .00016717  00000-0  10270-3 0  9005"
+        >>> l2 = "2 25544  51.6416 247.4627 0006703 130.5360 325.0288 15.72125391563537"
+        >>> kind, values = TLEOrbit(l1, l2).compiled_parameters((0.0, 600.0))
+        >>> kind, values["coefficients"].shape
+        ('piecewise_cubic', (4, 4320, 3))
+        """
+        if t_span is None:
+            return None
+        x, c = self._table.piecewise(*t_span)
+        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+
     def position(self, t) -> np.ndarray:
         """Position relative to the Earth's centre, inertial, m; shape ``t.shape + (3,)``."""
         return self._table(t)

@@ -3,30 +3,51 @@
 A torque model is a Python object; calling it costs microseconds of dispatch, more
 than the physics.  :func:`compile_torques` asks each model for its compiled form
 (:meth:`attitude.torques.TorqueModel.compiled_parameters`: the formula's name, its SI
-parameters and the paths or fields it reads) and lays the models out in three flat
-arrays, ``kinds`` (one formula per term), ``offsets`` (where each term's numbers start)
-and ``params`` (all the numbers); :func:`body_torque` evaluates their sum at one time,
-attitude and rate with the same formulas as the models' ``__call__``, in the same order
-of operations, so that the two agree to round-off.
+parameters and the paths or fields it reads, each with a ``compiled_parameters`` of its
+own) and lays the models out in three flat arrays, ``kinds`` (one formula per term),
+``offsets`` (where each term's numbers start) and ``params`` (all the numbers);
+:func:`body_torque` evaluates their sum at one time, attitude and rate with the same
+formulas as the models' ``__call__``, in the same order of operations, so that the two
+agree to round-off.
 
-========================  ==============================================================
-term                      ``params`` from ``offsets[k]``
-========================  ==============================================================
-``gravity_gradient``      ``mu``, inertia (9, row-major), path
-``constant_body``         torque (3)
-``constant_inertial``     torque (3)
-``heavy_top``             ``m g``, up (3), pivot -> centre of mass (3)
-``eddy_current``          isotropic (0 or 1), scalar, tensor (9), field
-``dissipation``           ``k``, inertia (9)
-========================  ==============================================================
+==========================  =============================================================
+term                        numbers from ``offsets[k] + 1``
+==========================  =============================================================
+``gravity_gradient``        ``mu``, inertia (9, row-major), path
+``constant_body``           torque (3)
+``constant_inertial``       torque (3)
+``heavy_top``               ``m g``, up (3), pivot -> centre of mass (3)
+``eddy_current``            isotropic (0 or 1), scalar, tensor (9), field
+``dissipation``             ``k``, inertia (9)
+``radiation_pressure``      time offset, pressure at 1 au, au, shadow (0 none, 1 conical,
+                            2 cylindrical), Earth and Sun radii, facets ``n``, Sun's path,
+                            body's path, normals (3n), ``r`` (3n), ``r x n`` (3n),
+                            ``A (1 - rho_s)``, ``A rho_s``, ``A rho_d / 3`` (n each)
+``drag``                    time offset, ``C_D``, co-rotation (0 or 1), Earth rotation
+                            rate and radius, layers ``L``, facets ``n``, path, base
+                            altitudes, densities, scale heights (L each), normals (3n),
+                            ``A r`` (3n)
+==========================  =============================================================
 
-A path is ``kind`` then its numbers: ``fixed`` (0: position), ``kepler`` (1: ``a, e,
-b = sqrt(1 - e^2), M0, n, mu, P (3), Q (3)``, Kepler's equation solved as
-:func:`attitude.orbit.solve_kepler`), ``piecewise_cubic`` (2: the number of breakpoints,
-the breakpoints, the coefficients ``(4, intervals, 3)`` highest power first).  A field is
-``uniform`` (0: vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and cosine of the
-tilt, rotation angle, rate, pole longitude, then the orbit's path) or ``piecewise_cubic``
-(2, as a path).
+Each term's numbers start with its time shift, ``params[offsets[k]]`` (the term is read
+at ``t`` plus it, 0 but for a model wrapped by ``shifted``).  A path or a field entry is
+the index of its block in ``params``; each path or field is
+stored once however many terms read it.  A path block is its kind then its numbers:
+``fixed`` (0: position), ``kepler`` (1: ``a, e, b = sqrt(1 - e^2), M0, n, mu, P (3),
+Q (3)``, Kepler's equation solved as :func:`attitude.orbit.solve_kepler`),
+``piecewise_cubic`` (2: the number ``N`` of breakpoints, their spacing if uniform else
+0, the breakpoints, the coefficients ``(4, N - 1, 3)`` highest power first).  A field
+block is ``uniform`` (0: vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and
+cosine of the tilt, rotation angle, rate, pole longitude, the index of the orbit's path)
+or ``piecewise_cubic`` (2, as a path).
+
+Tabulated paths and fields (:class:`~attitude.orbit.TabulatedPath`,
+:class:`~attitude.environment.TLEOrbit`, :class:`~attitude.environment.SunPath`,
+:class:`~attitude.environment.IGRF`) hand over their own interpolating cubics over the
+run's ``t_span`` (the segments of :class:`~attitude.environment.TimeTable` that cover
+it; a ``TabulatedPath`` its whole spline), so the compiled path adds no interpolation
+error of its own: it evaluates the polynomials the Python path evaluates.  Without
+``t_span`` the environment's tables have no compiled form.
 
 numba is optional: without it (or with ``ATTITUDE_NO_NUMBA=1``) the same functions run as
 plain Python, slowly but with the same results.  A model without a compiled form (a
@@ -74,9 +95,12 @@ __all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_K
 
 #: Codes of the terms in ``kinds``.
 TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
-              "heavy_top": 3, "eddy_current": 4, "dissipation": 5}
-_GRAVITY_GRADIENT, _CONSTANT_BODY, _CONSTANT_INERTIAL, _HEAVY_TOP, _EDDY, _DISSIPATION = \
-    range(6)
+              "heavy_top": 3, "eddy_current": 4, "dissipation": 5,
+              "radiation_pressure": 6, "drag": 7}
+(_GRAVITY_GRADIENT, _CONSTANT_BODY, _CONSTANT_INERTIAL, _HEAVY_TOP, _EDDY, _DISSIPATION,
+ _RADIATION, _DRAG) = range(8)
+#: Codes of the shadow models of radiation pressure.
+_SHADOWS = {None: 0.0, "conical": 1.0, "cylindrical": 2.0}
 #: Codes of the paths (first number of a path block).
 _PATHS = {"fixed": 0, "kepler": 1, "piecewise_cubic": 2}
 _FIXED, _KEPLER, _PIECEWISE = 0.0, 1.0, 2.0
@@ -125,31 +149,182 @@ def _eccentric_anomaly(M, e):
 
 
 @_jit
-def _piecewise(params, i, t):
-    """A piecewise cubic block at ``params[i]`` (number of breakpoints, breakpoints,
-    coefficients ``(4, intervals, 3)``) at ``t``: the interval whose left end is the last
-    breakpoint <= t (the end intervals extrapolate, as scipy's ``PPoly``), Horner's rule."""
+def _interval(params, i, t):
+    """The interval of the piecewise cubic block at ``params[i]`` (number ``N`` of
+    breakpoints, spacing ``h`` if uniform else 0, breakpoints, coefficients) holding
+    ``t``: the last breakpoint <= t (the end intervals extrapolate, as scipy's ``PPoly``).
+    Returns the index of its first coefficient, the stride between powers and ``t`` minus
+    its breakpoint."""
     nb = int(params[i])
-    x0 = i + 1
-    c0 = x0 + nb
+    h = params[i + 1]
+    x0 = i + 2
     n = nb - 1
-    lo, hi = 0, n - 1                     # bisection for the interval
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if params[x0 + mid] <= t:
-            lo = mid
-        else:
-            hi = mid - 1
-    d = t - params[x0 + lo]
-    stride = 3 * n
-    j = c0 + 3 * lo
-    out0 = ((params[j] * d + params[j + stride]) * d + params[j + 2 * stride]) * d \
-        + params[j + 3 * stride]
-    out1 = ((params[j + 1] * d + params[j + 1 + stride]) * d + params[j + 1 + 2 * stride]) \
-        * d + params[j + 1 + 3 * stride]
-    out2 = ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride]) \
-        * d + params[j + 2 + 3 * stride]
-    return out0, out1, out2
+    if h > 0.0:                           # uniform: start from the index, then step
+        j = int(min(max((t - params[x0]) / h, 0.0), n - 1.0))
+        while j < n - 1 and params[x0 + j + 1] <= t:
+            j += 1
+        while j > 0 and params[x0 + j] > t:
+            j -= 1
+    else:                                 # bisection
+        j, hi = 0, n - 1
+        while j < hi:
+            mid = (j + hi + 1) // 2
+            if params[x0 + mid] <= t:
+                j = mid
+            else:
+                hi = mid - 1
+    return x0 + nb + 3 * j, 3 * n, t - params[x0 + j]
+
+
+@_jit
+def _piecewise(params, i, t):
+    """The piecewise cubic block at ``params[i]`` at ``t``, Horner's rule (as
+    :class:`attitude.environment.TimeTable`)."""
+    j, stride, d = _interval(params, i, t)
+    return (((params[j] * d + params[j + stride]) * d + params[j + 2 * stride]) * d
+            + params[j + 3 * stride],
+            ((params[j + 1] * d + params[j + 1 + stride]) * d + params[j + 1 + 2 * stride])
+            * d + params[j + 1 + 3 * stride],
+            ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride])
+            * d + params[j + 2 + 3 * stride])
+
+
+@_jit
+def _piecewise_rate(params, i, t):
+    """The time derivative of the piecewise cubic block at ``params[i]`` at ``t``."""
+    j, stride, d = _interval(params, i, t)
+    return ((3.0 * params[j] * d + 2.0 * params[j + stride]) * d + params[j + 2 * stride],
+            (3.0 * params[j + 1] * d + 2.0 * params[j + 1 + stride]) * d
+            + params[j + 1 + 2 * stride],
+            (3.0 * params[j + 2] * d + 2.0 * params[j + 2 + stride]) * d
+            + params[j + 2 + 2 * stride])
+
+
+@_jit
+def _velocity(params, i, t):
+    """The path block at ``params[i]`` at ``t``: inertial velocity, m/s (Kepler:
+    ``v = sqrt(mu a) / r (-sin E P + b cos E Q)``; a table: its derivative)."""
+    kind = params[i]
+    if kind == _FIXED:
+        return 0.0, 0.0, 0.0
+    if kind == _KEPLER:
+        a, e, b = params[i + 1], params[i + 2], params[i + 3]
+        M = params[i + 4] + params[i + 5] * t
+        E = M if e == 0.0 else _eccentric_anomaly(M, e)
+        cE, sE = math.cos(E), math.sin(E)
+        f = math.sqrt(params[i + 6] * a) / (a * (1.0 - e * cE))
+        bc = b * cE
+        return (f * (-sE * params[i + 7] + bc * params[i + 10]),
+                f * (-sE * params[i + 8] + bc * params[i + 11]),
+                f * (-sE * params[i + 9] + bc * params[i + 12]))
+    return _piecewise_rate(params, i + 1, t)
+
+
+@_jit
+def _illumination(x, y, z, sx, sy, sz, model, earth_radius, sun_radius):
+    """Visible fraction of the solar disk (:func:`attitude.environment.illumination`,
+    one epoch, the same formulas): ``model`` 1 conical, 2 cylindrical."""
+    if model == 2.0:
+        d_sun = math.sqrt(sx * sx + sy * sy + sz * sz)
+        along = (x * sx + y * sy + z * sz) / d_sun
+        across2 = max(x * x + y * y + z * z - along * along, 0.0)
+        return 0.0 if (along < 0 and math.sqrt(across2) < earth_radius) else 1.0
+    tx, ty, tz = sx - x, sy - y, sz - z
+    d_sun = math.sqrt(tx * tx + ty * ty + tz * tz)
+    d_earth = math.sqrt(x * x + y * y + z * z)
+    a = math.asin(sun_radius / d_sun)
+    b = math.asin(min(max(earth_radius / d_earth, -1.0), 1.0))
+    cos_c = -(x * tx + y * ty + z * tz) / (d_earth * d_sun)
+    c = math.acos(min(max(cos_c, -1.0), 1.0))
+    if c >= a + b:
+        return 1.0
+    if c <= b - a:
+        return 0.0
+    if c <= a - b:
+        return 1.0 - (b * b) / (a * a)
+    u = (c * c + a * a - b * b) / (2 * c)
+    v = math.sqrt(max(a * a - u * u, 0.0))
+    lens = (a * a * math.acos(min(max(u / a, -1.0), 1.0))
+            + b * b * math.acos(min(max((c - u) / b, -1.0), 1.0)) - c * v)
+    return min(max(1.0 - lens / (math.pi * a * a), 0.0), 1.0)
+
+
+@_jit
+def _radiation(params, i, t, qx, qy, qz, qw):
+    """Solar radiation pressure (:class:`attitude.environment.SolarRadiationPressure`):
+    ``-P [(sum_k w_k r_k) x s + 2 sum_k u_k (r_k x n_k)]``."""
+    t = t + params[i]
+    n = int(params[i + 6])
+    sx, sy, sz = _position(params, int(params[i + 7]), t)
+    x, y, z = _position(params, int(params[i + 8]), t)
+    dx, dy, dz = sx - x, sy - y, sz - z
+    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+    ratio = params[i + 2] / dist
+    p = params[i + 1] * (ratio * ratio)
+    if params[i + 3] != 0.0:
+        p *= _illumination(x, y, z, sx, sy, sz, params[i + 3], params[i + 4], params[i + 5])
+    if p == 0.0:
+        return 0.0, 0.0, 0.0
+    s0, s1, s2 = _to_body(qx, qy, qz, qw, dx / dist, dy / dist, dz / dist)
+    normals = i + 9
+    r = normals + 3 * n
+    rxn = r + 3 * n
+    one_minus_s = rxn + 3 * n
+    spec = one_minus_s + n
+    diff = spec + n
+    W0 = W1 = W2 = U0 = U1 = U2 = 0.0
+    for k in range(n):
+        c = (params[normals + 3 * k] * s0 + params[normals + 3 * k + 1] * s1
+             + params[normals + 3 * k + 2] * s2)
+        if c > 0.0:
+            w = c * params[one_minus_s + k]
+            u = c * (c * params[spec + k] + params[diff + k])
+            W0 += w * params[r + 3 * k]
+            W1 += w * params[r + 3 * k + 1]
+            W2 += w * params[r + 3 * k + 2]
+            U0 += u * params[rxn + 3 * k]
+            U1 += u * params[rxn + 3 * k + 1]
+            U2 += u * params[rxn + 3 * k + 2]
+    return (-p * ((W1 * s2 - W2 * s1) + 2.0 * U0), -p * ((W2 * s0 - W0 * s2) + 2.0 * U1),
+            -p * ((W0 * s1 - W1 * s0) + 2.0 * U2))
+
+
+@_jit
+def _drag(params, i, t, qx, qy, qz, qw):
+    """Free-molecular drag (:class:`attitude.environment.AerodynamicDrag`):
+    ``-1/2 rho v^2 C_D (sum_k A_k c_k r_k) x v_hat``, the air co-rotating."""
+    t = t + params[i]
+    layers, n = int(params[i + 5]), int(params[i + 6])
+    orbit = int(params[i + 7])
+    x, y, z = _position(params, orbit, t)
+    vx, vy, vz = _velocity(params, orbit, t)
+    if params[i + 2] != 0.0:
+        rate = params[i + 3]
+        vx, vy = vx + rate * y, vy - rate * x
+    h = math.sqrt(x * x + y * y + z * z) - params[i + 4]
+    bases = i + 8
+    k = 0                              # the last layer whose base is <= h (or the first)
+    while k + 1 < layers and params[bases + k + 1] <= h:
+        k += 1
+    rho = params[bases + layers + k] * math.exp(-(h - params[bases + k])
+                                                / params[bases + 2 * layers + k])
+    v2 = vx * vx + vy * vy + vz * vz
+    if v2 == 0.0 or rho == 0.0:
+        return 0.0, 0.0, 0.0
+    speed = math.sqrt(v2)
+    v0, v1, v2h = _to_body(qx, qy, qz, qw, vx / speed, vy / speed, vz / speed)
+    normals = bases + 3 * layers
+    ar = normals + 3 * n
+    S0 = S1 = S2 = 0.0
+    for j in range(n):
+        c = (params[normals + 3 * j] * v0 + params[normals + 3 * j + 1] * v1
+             + params[normals + 3 * j + 2] * v2h)
+        if c > 0.0:
+            S0 += c * params[ar + 3 * j]
+            S1 += c * params[ar + 3 * j + 1]
+            S2 += c * params[ar + 3 * j + 2]
+    f = -0.5 * rho * v2 * params[i + 1]
+    return f * (S1 * v2h - S2 * v1), f * (S2 * v0 - S0 * v2h), f * (S0 * v1 - S1 * v0)
 
 
 @_jit
@@ -184,7 +359,7 @@ def _field(params, i, t):
         coefficient, st, ct = params[i + 1], params[i + 2], params[i + 3]
         lam = (params[i + 4] + params[i + 5] * t) + params[i + 6]
         mx, my, mz = -(st * math.cos(lam)), -(st * math.sin(lam)), -ct
-        rx, ry, rz = _position(params, i + 7, t)
+        rx, ry, rz = _position(params, int(params[i + 7]), t)
         r2 = rx * rx + ry * ry + rz * rz
         rn = math.sqrt(r2)
         hx, hy, hz = rx / rn, ry / rn, rz / rn
@@ -216,7 +391,7 @@ def _matvec(params, i, x, y, z):
 
 
 @_jit
-def body_torque(kinds, offsets, params, t, q_b, w_b, out):
+def body_torque(kinds, offsets, params, t0, q_b, w_b, out):
     """Sum of the compiled torque models, body frame, N m, written into ``out``.
 
     Parameters
@@ -225,7 +400,7 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
         Term codes and where each term's numbers start in ``params``
         (:class:`CompiledTorques`).
     params : (m,) float64 array
-    t : float
+    t0 : float
         Seconds since the run's epoch (the models' time).
     q_b : (4,) float64 array
         Attitude, body -> inertial, scalar-last (normalised here, as the models do).
@@ -255,9 +430,10 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
     out[2] = 0.0
     for k in range(kinds.shape[0]):
         kind = kinds[k]
-        i = offsets[k]
+        t = t0 + params[offsets[k]]             # the term's time shift
+        i = offsets[k] + 1
         if kind == _GRAVITY_GRADIENT:           # 3 mu / r^5 (r_b x I r_b)
-            rx, ry, rz = _position(params, i + 10, t)
+            rx, ry, rz = _position(params, int(params[i + 10]), t)
             bx, by, bz = _to_body(qx, qy, qz, qw, rx, ry, rz)
             r2 = bx * bx + by * by + bz * bz
             ix, iy, iz = _matvec(params, i + 1, bx, by, bz)
@@ -276,7 +452,7 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
             m0, m1, m2 = mg * (uy * lz - uz * ly), mg * (uz * lx - ux * lz), \
                 mg * (ux * ly - uy * lx)
         elif kind == _EDDY:                     # (M (w x B_b)) x B_b
-            fx, fy, fz = _field(params, i + 11, t)
+            fx, fy, fz = _field(params, int(params[i + 11]), t)
             bx, by, bz = _to_body(qx, qy, qz, qw, fx, fy, fz)
             x0, x1, x2 = w1 * bz - w2 * by, w2 * bx - w0 * bz, w0 * by - w1 * bx
             if params[i] != 0.0:
@@ -285,6 +461,10 @@ def body_torque(kinds, offsets, params, t, q_b, w_b, out):
             else:
                 y0, y1, y2 = _matvec(params, i + 2, x0, x1, x2)
             m0, m1, m2 = y1 * bz - y2 * by, y2 * bx - y0 * bz, y0 * by - y1 * bx
+        elif kind == _RADIATION:
+            m0, m1, m2 = _radiation(params, i, t, qx, qy, qz, qw)
+        elif kind == _DRAG:
+            m0, m1, m2 = _drag(params, i, t, qx, qy, qz, qw)
         else:                                   # dissipation: -k w_perp (to L = I w)
             Lx, Ly, Lz = _matvec(params, i + 1, w0, w1, w2)
             L2 = Lx * Lx + Ly * Ly + Lz * Lz
@@ -328,8 +508,8 @@ class CompiledTorques:
     >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
     >>> c = compile_torques(GravityGradient(3.986004418e14, [7e6, 0.0, 0.0])
     ...                     + ConstantTorque([0.0, 0.0, 1e-6]), body)
-    >>> c.names, c.offsets
-    (('gravity_gradient', 'constant_body'), array([ 0, 14]))
+    >>> c.names, c.offsets        # the position's block (4 numbers) comes first
+    (('gravity_gradient', 'constant_body'), array([ 4, 16]))
     >>> c(0.0, [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0])
     array([0.e+00, 0.e+00, 1.e-06])
     """
@@ -352,63 +532,123 @@ class CompiledTorques:
         return f"CompiledTorques({' + '.join(self.names) or 'nothing'}, numba={NUMBA})"
 
 
-def _vector(values, key: str, n: int) -> list[float]:
+def _vector(values, key: str, n: int) -> np.ndarray:
     v = np.asarray(values[key], dtype=float).reshape(-1)
     if v.shape != (n,):
         raise ValueError(f"{key}: expected {n} numbers, got {v.shape}")
-    return v.tolist()
+    return v
 
 
-def _source(obj, codes: dict, t_span) -> list[float] | None:
-    """The block of a path or field (``codes``: its kinds), or None without a compiled
-    form."""
-    describe = getattr(obj, "compiled_parameters", None)
-    if not callable(describe):
-        return None
-    part = describe(t_span)
-    if part is None or part[0] not in codes:
-        return None
-    kind, v = part
-    block = [float(codes[kind])]
-    if kind in ("fixed", "uniform"):
-        return block + _vector(v, "position" if kind == "fixed" else "vector", 3)
-    if kind == "kepler":
-        return block + [float(v[k]) for k in ("a", "e", "b", "mean_anomaly",
-                                              "mean_motion", "mu")] \
-            + _vector(v, "P", 3) + _vector(v, "Q", 3)
-    if kind == "tilted_dipole":
-        path = _source(v["orbit"], _PATHS, t_span)
-        if path is None:
+class _Layout:
+    """``params`` being built: blocks appended in order; each path or field stored once
+    however many terms read it (a year of a tabulated orbit is ~10^7 numbers)."""
+
+    def __init__(self, t_span):
+        self.t_span = t_span
+        self.blocks: list[np.ndarray] = []
+        self.size = 0
+        self._sources: dict[int, tuple] = {}       # id -> (object, index or None)
+
+    def add(self, *parts) -> int:
+        """Append ``parts`` (numbers or arrays) as one block; its index in ``params``."""
+        block = np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in parts])
+        self.blocks.append(block)
+        self.size += block.size
+        return self.size - block.size
+
+    def source(self, obj, codes: dict) -> int | None:
+        """Index of the block of a path or field (``codes``: its kinds), or None without
+        a compiled form."""
+        known = self._sources.get(id(obj))
+        if known is not None and known[0] is obj:
+            return known[1]
+        index = self._encode(obj, codes)
+        self._sources[id(obj)] = (obj, index)
+        return index
+
+    def _encode(self, obj, codes: dict) -> int | None:
+        describe = getattr(obj, "compiled_parameters", None)
+        if not callable(describe):
             return None
-        return block + [float(v[k]) for k in ("coefficient", "sin_tilt", "cos_tilt",
-                                              "rotation_angle", "rotation_rate",
-                                              "pole_longitude")] + path
-    x = np.asarray(v["breakpoints"], dtype=float)                 # piecewise cubic
-    c = np.asarray(v["coefficients"], dtype=float)
-    if x.ndim != 1 or c.shape != (4, x.size - 1, 3):
-        raise ValueError(f"piecewise cubic: expected breakpoints (N,) and coefficients "
-                         f"(4, N - 1, 3), got {x.shape} and {c.shape}")
-    return block + [float(x.size)] + x.tolist() + c.reshape(-1).tolist()
-
-
-def _term(kind: str, v: dict, t_span) -> list[float] | None:
-    """The numbers of one term, or None without a compiled form."""
-    if kind == "gravity_gradient":
-        path = _source(v["orbit"], _PATHS, t_span)
-        return None if path is None else [float(v["mu"])] + _vector(v, "inertia", 9) + path
-    if kind in ("constant_body", "constant_inertial"):
-        return _vector(v, "torque", 3)
-    if kind == "heavy_top":
-        return [float(v["mass_g"])] + _vector(v, "up", 3) + _vector(v, "pivot_to_com", 3)
-    if kind == "eddy_current":
-        field = _source(v["field"], _FIELDS, t_span)
-        if field is None:
+        part = describe(self.t_span)
+        if part is None or part[0] not in codes:
             return None
-        return [1.0 if v["isotropic"] else 0.0, float(v["scalar"])] \
-            + _vector(v, "tensor", 9) + field
-    if kind == "dissipation":
-        return [float(v["k"])] + _vector(v, "inertia", 9)
-    return None
+        kind, v = part
+        code = float(codes[kind])
+        if kind in ("fixed", "uniform"):
+            return self.add(code, _vector(v, "position" if kind == "fixed" else "vector", 3))
+        if kind == "kepler":
+            return self.add(code, [float(v[k]) for k in ("a", "e", "b", "mean_anomaly",
+                                                         "mean_motion", "mu")],
+                            _vector(v, "P", 3), _vector(v, "Q", 3))
+        if kind == "tilted_dipole":
+            path = self.source(v["orbit"], _PATHS)
+            if path is None:
+                return None
+            return self.add(code, [float(v[k]) for k in (
+                "coefficient", "sin_tilt", "cos_tilt", "rotation_angle", "rotation_rate",
+                "pole_longitude")], float(path))
+        x = np.asarray(v["breakpoints"], dtype=float)                 # piecewise cubic
+        c = np.asarray(v["coefficients"], dtype=float)
+        if x.ndim != 1 or x.size < 2 or c.shape != (4, x.size - 1, 3):
+            raise ValueError(f"piecewise cubic: expected breakpoints (N,) and coefficients "
+                             f"(4, N - 1, 3), got {x.shape} and {c.shape}")
+        h = (x[-1] - x[0]) / (x.size - 1)
+        uniform = np.all(np.abs(np.diff(x) - h) <= 1e-9 * h)   # start lookups by index
+        return self.add(code, float(x.size), h if uniform else 0.0, x, c)
+
+    def term(self, kind: str, v: dict) -> int | None:
+        """Append the numbers of one term, its time shift first; their index, or None
+        without a compiled form."""
+        numbers = self._term(kind, v)
+        if numbers is None:
+            return None
+        return self.add(float(v.get("time_shift", 0.0)), *numbers)
+
+    def _term(self, kind: str, v: dict) -> tuple | None:
+        """The numbers of one term (after its time shift), or None."""
+        if kind == "gravity_gradient":
+            path = self.source(v["orbit"], _PATHS)
+            if path is None:
+                return None
+            return float(v["mu"]), _vector(v, "inertia", 9), float(path)
+        if kind in ("constant_body", "constant_inertial"):
+            return (_vector(v, "torque", 3),)
+        if kind == "heavy_top":
+            return float(v["mass_g"]), _vector(v, "up", 3), _vector(v, "pivot_to_com", 3)
+        if kind == "eddy_current":
+            field = self.source(v["field"], _FIELDS)
+            if field is None:
+                return None
+            return (1.0 if v["isotropic"] else 0.0, float(v["scalar"]),
+                    _vector(v, "tensor", 9), float(field))
+        if kind == "dissipation":
+            return float(v["k"]), _vector(v, "inertia", 9)
+        if kind == "radiation_pressure":
+            sun, orbit = self.source(v["sun"], _PATHS), self.source(v["orbit"], _PATHS)
+            if sun is None or orbit is None or v["shadow"] not in _SHADOWS:
+                return None
+            n = len(v["one_minus_s"])
+            facets = tuple(_vector(v, key, size * n) for key, size in (
+                ("normals", 3), ("r", 3), ("rxn", 3), ("one_minus_s", 1), ("spec", 1),
+                ("diff", 1)))
+            return (float(v["time_offset"]), float(v["pressure"]),
+                    float(v["astronomical_unit"]), _SHADOWS[v["shadow"]],
+                    float(v["earth_radius"]), float(v["sun_radius"]), float(n),
+                    float(sun), float(orbit)) + facets
+        if kind == "drag":
+            orbit = self.source(v["orbit"], _PATHS)
+            if orbit is None:
+                return None
+            layers, n = len(v["bases"]), len(v["ar"])
+            table = tuple(_vector(v, key, layers)
+                          for key in ("bases", "densities", "scale_heights"))
+            return (float(v["time_offset"]), float(v["cd"]),
+                    1.0 if v["corotation"] else 0.0, float(v["rotation_rate"]),
+                    float(v["earth_radius"]), float(layers), float(n),
+                    float(orbit)) + table + (_vector(v, "normals", 3 * n),
+                                             _vector(v, "ar", 3 * n))
+        return None
 
 
 def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
@@ -422,21 +662,32 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
     body : RigidBody
         The one body the torques act on (its inertia and mass enter the parameters).
     t_span : (float, float), optional
-        The times (s since the epoch) the run covers: a tabulated path checks it
-        against its table.
+        The times (s since the epoch) the run covers.  The environment's tabulated
+        paths and fields (a TLE orbit, the Sun, IGRF) hand over their cubics over it, so
+        they need it (without it they have no compiled form); a
+        :class:`~attitude.orbit.TabulatedPath` hands over its whole spline and checks
+        ``t_span`` against its table.
 
     Returns
     -------
     CompiledTorques or None
         None if a model is a plain function, a :class:`~attitude.torques.FunctionTorque`,
-        a user's subclass, or reads a path or field without a compiled form (a
-        :class:`~attitude.orbit.CallablePath`, a user's field function): the caller
-        then calls the models in Python.
+        a user's subclass (or the generic wrapper of ``shifted`` around one of the
+        models whose ``shifted`` has no form of its own), or reads a path or field
+        without a compiled form (a :class:`~attitude.orbit.CallablePath`, a user's field
+        function, a density function): the caller then calls the models in Python.
 
     Raises
     ------
     InvalidStateError
         If ``body`` is not one :class:`~attitude.body.RigidBody`.
+
+    Notes
+    -----
+    The environment's tables over ``t_span`` are built here, at once, rather than one
+    segment at a time as a Python run reaches them: the same SGP4 or IGRF evaluations,
+    paid up front (about 1.5 s per day of a TLE orbit at 20 s nodes), and ~12 numbers
+    per node held twice (the table's and the compiled copy: ~0.2 GB for a year).
 
     Examples
     --------
@@ -455,7 +706,8 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
                                 key="body")
     if isinstance(models, TorqueModel) or not isinstance(models, Sequence):
         models = [models]
-    names, kinds, offsets, params = [], [], [], []
+    layout = _Layout(t_span)
+    names, kinds, offsets = [], [], []
     for model in models:
         if not isinstance(model, TorqueModel):
             return None
@@ -463,15 +715,14 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
         if parts is None:
             return None
         for kind, values in parts:
-            numbers = _term(kind, values, t_span)
-            if numbers is None:
+            index = layout.term(kind, values)
+            if index is None:
                 return None
             names.append(kind)
             kinds.append(TERM_KINDS[kind])
-            offsets.append(len(params))
-            params.extend(numbers)
-    arrays = [np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64),
-              np.array(params, dtype=np.float64)]
+            offsets.append(index)
+    params = np.concatenate(layout.blocks) if layout.blocks else np.zeros(0)
+    arrays = [np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64), params]
     for a in arrays:
         a.setflags(write=False)
     return CompiledTorques(*arrays, tuple(names))
