@@ -202,7 +202,7 @@ def ellipj(u, m):
     u : float
         Argument.
     m : float
-        Parameter ``k^2`` in ``[0, 1]``; NaN outside.
+        Parameter ``k^2`` in ``[0, 1]``; NaN outside (and for an infinite ``u``).
 
     Returns
     -------
@@ -216,7 +216,7 @@ def ellipj(u, m):
     >>> [bool(abs(x - y) < 1e-15) for x, y in zip((sn, cn, dn), special.ellipj(0.7, 0.3)[:3])]
     [True, True, True]
     """
-    if not (0.0 <= m <= 1.0):
+    if not (0.0 <= m <= 1.0 and math.isfinite(u)):
         return math.nan, math.nan, math.nan
     if m < _M_SMALL:
         t = math.sin(u)
