@@ -151,7 +151,8 @@ def test_ellipj_limits(k):
         assert sn == math.tanh(u) and cn == dn
         assert abs(cn - (1 / math.cosh(u) if u < 700 else 0.0)) <= 4 * EPS * cn
     assert all(math.isnan(x) for x in k.ellipj(0.5, 1.5) + k.ellipj(0.5, -0.1)
-               + k.ellipj(0.5, math.nan))
+               + k.ellipj(0.5, math.nan) + k.ellipj(math.inf, 0.5)
+               + k.ellipj(-math.inf, 1 - 1e-12) + k.ellipj(math.nan, 0.0))
 
 
 # --- Carlson's integrals -----------------------------------------------------------------
@@ -330,11 +331,12 @@ def test_free_flow_one_equals_the_numpy_paths(k, h):
 
 def test_free_flow_one_near_the_separatrix_with_long_steps(k):
     """1 - m down to 2e-13 and steps past the quarter period K (12 - 16 here), where
-    scipy's ellipj (so splitting.free_flow today) leaves the elliptic functions: against
-    the closed form.  The motion there is ill-conditioned: a relative change eps of the
-    state changes m1 by ~eps and the period 4K/lambda by ~eps/(2 m1) relative (K ~
-    ln(4/sqrt m1)), so after |v|/(4K) periods the phase is off by ~|v| eps/(2 m1)... and
-    the rates and attitude by up to that, relative: bound (1 + |v|) eps / m1."""
+    scipy's ellipj leaves the elliptic functions (the numpy paths of splitting take
+    compiled.ellipj there): against the closed form.  The motion there is ill-
+    conditioned: a relative change eps of the state changes m1 by ~eps and the period
+    4K/lambda by ~eps/(2 m1) relative (K ~ ln(4/sqrt m1)), so after |v|/(4K) periods the
+    phase is off by ~|v| eps/(2 m1), and the rates and attitude by up to that, relative:
+    bound (1 + |v|) eps / m1."""
     I = np.array([1.0, 2.0, 3.0])
     consts = splitting._FreeConstants(I)
     q0 = np.array([0.1, 0.2, 0.3, 0.9]) / math.sqrt(0.95)
@@ -343,12 +345,14 @@ def test_free_flow_one_near_the_separatrix_with_long_steps(k):
         d21, d32, d31, Q1, Q3, D, _ = fb.invariants(*I, *w0)
         _, m1, lam2 = fb.jacobi_parameters(*I, d21, d32, d31, Q1, Q3, D)
         for h in (5.0, 20.0, -60.0):
-            q, w = _run_one(k, consts, 0, q0, w0, h)
             q_ref, w_ref = free_rotation(I, q0, w0, [h])
             bound = (1 + abs(h) * math.sqrt(lam2)) * EPS / m1
-            assert np.max(np.abs(w - w_ref[0])) <= bound * np.linalg.norm(w0), (gap, h)
-            s = 1.0 if q @ q_ref[0] >= 0 else -1.0
-            assert np.max(np.abs(q - s * q_ref[0])) <= bound, (gap, h)
+            q1, w1 = splitting._free_flow1(consts.row(0), tuple(q0), tuple(w0), h)
+            for q, w in (_run_one(k, consts, 0, q0, w0, h),         # and the numpy paths
+                         splitting.free_flow(I, q0, w0, h), (np.array(q1), np.array(w1))):
+                assert np.max(np.abs(w - w_ref[0])) <= bound * np.linalg.norm(w0), (gap, h)
+                s = 1.0 if q @ q_ref[0] >= 0 else -1.0
+                assert np.max(np.abs(q - s * q_ref[0])) <= bound, (gap, h)
 
 
 def test_free_flow_one_conserves_and_returns(k):

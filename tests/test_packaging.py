@@ -13,6 +13,7 @@ from importlib import metadata
 from pathlib import Path
 
 import pytest
+from packaging.requirements import Requirement  # a dependency of pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
@@ -130,3 +131,27 @@ def test_installed_metadata():
     assert "LICENSE" in (dist.metadata.get_all("License-File") or [])
     scripts = {ep.name: ep.value for ep in dist.entry_points if ep.group == "console_scripts"}
     assert scripts == {"attitude": "attitude.cli:main"}
+
+
+@pytest.mark.parametrize(("platform", "machine", "python", "installed"), [
+    ("linux", "x86_64", "3.11", True),
+    ("linux", "aarch64", "3.14", True),
+    ("linux", "x86_64", "3.15", False),     # no wheels yet: never build LLVM from source
+    ("linux", "ppc64le", "3.12", False),    # no wheels
+    ("linux", "armv7l", "3.12", False),
+    ("win32", "AMD64", "3.12", True),
+    ("win32", "ARM64", "3.12", True),
+    ("win32", "ARM64", "3.11", False),      # Windows ARM64 wheels from Python 3.12
+    ("darwin", "arm64", "3.13", True),
+    ("darwin", "x86_64", "3.13", True),
+    ("darwin", "arm64", "3.14", False),     # only beta wheels for macOS and Python 3.14
+])
+def test_numba_is_a_dependency_only_where_it_has_wheels(platform, machine, python, installed):
+    """numba (the compiled kernels, optional at run time) is installed by default on the
+    platforms and Pythons numba and llvmlite publish wheels for, nowhere else."""
+    numba = [Requirement(r) for r in PYPROJECT["project"]["dependencies"]
+             if Requirement(r).name == "numba"]
+    assert len(numba) == 1 and numba[0].marker is not None
+    env = {"sys_platform": platform, "platform_machine": machine, "python_version": python,
+           "python_full_version": python + ".0", "platform_system": platform}
+    assert numba[0].marker.evaluate(env) is installed

@@ -50,6 +50,10 @@ __all__ = ["NUMBA", "jit", "ellipj", "elliprf", "elliprj", "free_flow_one"]
 #: Unit roundoff of float64 (half the spacing of 1.0): the AGM's stopping test (Cephes'
 #: MACHEP) and Carlson's ``r``.
 _U = 2.0 ** -53
+#: Carlson's (1995) stopping factors ``(3 r)^(-1/6)`` for R_F and ``(r / 4)^(-1/6)`` for
+#: R_J, with ``r`` the unit roundoff (constants here: numba folds module globals).
+_RF_Q = (3.0 * _U) ** (-1.0 / 6.0)
+_RJ_Q = (0.25 * _U) ** (-1.0 / 6.0)
 
 
 def _numba():
@@ -198,7 +202,7 @@ def ellipj(u, m):
     u : float
         Argument.
     m : float
-        Parameter ``k^2`` in ``[0, 1]``; NaN outside.
+        Parameter ``k^2`` in ``[0, 1]``; NaN outside (and for an infinite ``u``).
 
     Returns
     -------
@@ -212,7 +216,7 @@ def ellipj(u, m):
     >>> [bool(abs(x - y) < 1e-15) for x, y in zip((sn, cn, dn), special.ellipj(0.7, 0.3)[:3])]
     [True, True, True]
     """
-    if not (0.0 <= m <= 1.0):
+    if not (0.0 <= m <= 1.0 and math.isfinite(u)):
         return math.nan, math.nan, math.nan
     if m < _M_SMALL:
         t = math.sin(u)
@@ -273,7 +277,7 @@ def elliprf(x, y, z):
     if x == math.inf or y == math.inf or z == math.inf:
         return 0.0
     a0 = (x + y + z) / 3.0
-    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z)) / (3.0 * _U) ** (1.0 / 6.0)
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z)) * _RF_Q
     a = a0
     x0, y0 = x, y
     f = 1.0                                           # 4^-n
@@ -332,8 +336,7 @@ def elliprj(x, y, z, p):
         return 0.0
     a0 = (x + y + z + 2.0 * p) / 5.0
     delta = (p - x) * (p - y) * (p - z)
-    q = (max(abs(a0 - x), abs(a0 - y), abs(a0 - z), abs(a0 - p))
-         / (0.25 * _U) ** (1.0 / 6.0))
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z), abs(a0 - p)) * _RJ_Q
     a = a0
     x0, y0, z0 = x, y, z
     f = 1.0                                           # 4^-n

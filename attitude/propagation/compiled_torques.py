@@ -58,7 +58,6 @@ user's function or subclass, a :class:`~attitude.orbit.CallablePath`) makes
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -67,29 +66,8 @@ import numpy as np
 from ..body import RigidBody
 from ..errors import InvalidStateError
 from ..torques import TorqueModel
-
-# The same shim as attitude.propagation.compiled (to be replaced by an import from it):
-# numba is optional (no wheels on some platforms; ATTITUDE_NO_NUMBA=1 turns it off to
-# test the fallback), so it is imported under a guard at module level.
-if os.environ.get("ATTITUDE_NO_NUMBA") == "1":
-    _numba = None
-else:
-    try:
-        import numba as _numba
-    except ImportError:  # optional dependency: the plain-Python path is the fallback
-        _numba = None
-
-#: Whether the kernels are compiled by numba.
-NUMBA = _numba is not None
-
-
-def _jit(function):
-    """``numba.njit(cache=True, error_model="numpy")`` when numba is in use, else the
-    function itself."""
-    if NUMBA:
-        return _numba.njit(cache=True, error_model="numpy")(function)
-    return function
-
+from .compiled import NUMBA
+from .compiled import jit as _jit
 
 __all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_KINDS"]
 

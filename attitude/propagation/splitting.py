@@ -83,7 +83,7 @@ from ..deprecation import moved_attribute
 from ..errors import InvalidStateError, PropagationError
 from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
 from ..torques import as_torque_model
-from . import compiled_loop
+from . import compiled, compiled_loop
 from .compiled_torques import compile_torques
 
 __all__ = [
@@ -99,6 +99,12 @@ __all__ = [
 # The free flow's tolerances are those of attitude.freebody: EQUAL_MOMENTS_RTOL (a
 # spherical body rotates uniformly) and PURE_SPIN_TOL_UNSCALED (a principal-axis spin
 # rotates uniformly; this kernel works on unscaled rates, see its comment there).
+
+
+#: scipy.special.ellipj (Cephes) switches to its expansion about m = 1 from this m on; the
+#: expansion fails past the first quarter period (sn > 1, cn ~ -3e5 at u = 40,
+#: m = 1 - 1e-11), so there the free flow takes compiled.ellipj (Landen from 1 - m).
+_CEPHES_NEAR1 = 0.9999999999
 
 
 def __getattr__(name):
@@ -161,6 +167,8 @@ def _free_flow_vec(c: _FreeConstants, q: np.ndarray, w: np.ndarray, h: float):
         lamb = np.where(lam, -s, s) * np.sqrt(lam2)
         v = lamb * h
         sn, cn, dn, _ = sp.ellipj(v, m)
+        for i in np.flatnonzero(m >= _CEPHES_NEAR1):
+            sn[i], cn[i], dn[i] = compiled.ellipj(float(v[i]), float(m[i]))
         snl = sn / lamb
         # rates by the addition theorems, no amplitude in a denominator          (S2)
         D = 1.0 - (I2 * d21 / Q3) * w2s * (sn * sn)
@@ -274,8 +282,11 @@ def _free_flow1(k: tuple, q: tuple, w: tuple, h: float):
     s = -1.0 if w3 < 0 else 1.0
     lamb = (-s if lam else s) * math.sqrt(lam2)
     v = lamb * h
-    sn, cn, dn, _ = sp.ellipj(v, m)
-    sn, cn, dn = float(sn), float(cn), float(dn)
+    if m >= _CEPHES_NEAR1:
+        sn, cn, dn = compiled.ellipj(float(v), float(m))
+    else:
+        sn, cn, dn, _ = sp.ellipj(v, m)
+        sn, cn, dn = float(sn), float(cn), float(dn)
     snl = sn / lamb
     D = 1.0 - (I2 * d21 / Q3) * w2s * (sn * sn)
     n1 = (w1 * cn - (d32 / I1) * w2 * w3 * snl * dn) / D
