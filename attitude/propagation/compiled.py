@@ -474,7 +474,8 @@ def free_flow_one(c, q, w, h):
 
     Parameters
     ----------
-    c : float64 array (7,)
+    c : float64 array (7,), like ``q`` and ``w`` C-contiguous (each other layout or
+        dtype compiles once more)
         ``[A, B, C, spherical, lam_on_tie, nu_sam, nu_lam]``: the moments scaled by a
         power of two and the flags (0 or 1) and characteristics of
         ``splitting._FreeConstants`` (its ``row``).
