@@ -314,7 +314,7 @@ def _assert_flow_agrees(q, w, q_ref, w_ref, omega, h, what):
                  magnitude=max(float(np.linalg.norm(omega)), 1e-300) * turn, what=f"w {what}")
 
 
-@pytest.mark.parametrize("h", [1e-3, 0.37, -2.5, 30.0, -61.0])
+@pytest.mark.parametrize("h", [0.0, 1e-3, 0.37, -2.5, 30.0, -61.0])
 def test_free_flow_one_equals_the_numpy_paths(k, h):
     """SAM, LAM, near the separatrix, symmetric, spherical, pure spin, rest, negative
     steps and steps of several polhode periods (|lambda h| up to ~100 >> 4K)."""

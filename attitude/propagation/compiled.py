@@ -1,10 +1,10 @@
 r"""Compiled scalar kernels of the splitting integrator's one-body path (numba, optional).
 
 The one-body step of :mod:`attitude.propagation.splitting` costs ~470 us of Python and
-numpy dispatch; most of it is the exact free flow.  This module holds that flow and the
-special functions it needs as *scalar* functions written so that numba compiles them
-(``nopython``, no allocation), and so that they still run as plain Python when numba is
-absent or disabled:
+numpy dispatch (issue 18), ~11 us of it in each exact free flow.  This module holds that
+flow and the special functions it needs as *scalar* functions written so that numba
+compiles them (``nopython``, no allocation), and so that they still run as plain Python
+when numba is absent or disabled:
 
 - :data:`NUMBA` is True when numba imports and ``ATTITUDE_NO_NUMBA=1`` is not set;
 - :func:`jit` is ``numba.njit(cache=True, error_model="numpy")`` then, else the
@@ -17,15 +17,17 @@ absent or disabled:
   over one step) on arrays updated in place.
 
 Every function here is a plain-arithmetic twin of the numpy/scipy path; the tests run
-each one compiled and as plain Python (``.py_func``) against scipy, mpmath and the
-splitting module.
+each one compiled and as plain Python (the module loaded with ``ATTITUDE_NO_NUMBA=1``)
+against scipy, mpmath and the splitting module.
 
 The one deliberate difference from scipy is :func:`ellipj` at ``1 - m <= 1e-10``: Cephes
 switches there to the expansion in ``1 - m`` about ``m = 1`` (A&S 16.15), which holds
 only well inside the first quarter period; beyond it scipy returns values that are not
 elliptic functions at all (``sn > 1``, ``cn = -2.9e5`` at ``u = 40``, ``m = 1 - 1e-11``).
 Here the expansion is used only where its next term is below the rounding error, and
-the AGM (carried to as many levels as ``m`` needs) everywhere else.
+elsewhere the descending Landen transformation from ``1 - m`` (as the closed form does,
+:func:`attitude.elliptic.landen_sncndn`) on the argument reduced to ``[0, K/2]``;
+``splitting`` takes this function there too.
 
 References
 ----------
@@ -61,7 +63,7 @@ def _numba():
     if os.environ.get("ATTITUDE_NO_NUMBA", "") == "1":
         return None
     try:
-        import numba  # optional (wheels on x86-64/aarch64 only): the kernels compile with it
+        import numba  # optional (wheels for some platforms only): the kernels compile with it
     except ImportError:
         return None
     return numba
@@ -193,9 +195,10 @@ def ellipj(u, m):
     Cephes' algorithm (``scipy.special.ellipj``): the expansion about ``m = 0`` below
     ``m = 1e-9`` (A&S 16.13), the AGM scale and its backward recurrence for the
     amplitude (A&S 16.4, DLMF 22.20(ii)), ``dn = cos(phi) / cos(phi - phi_1)`` unless
-    that quotient is small (then ``sqrt(1 - m sn^2)``), and the expansion about ``m = 1``
+    that cosine is small (then ``sqrt(1 - m sn^2)``), and the expansion about ``m = 1``
     above ``m = 1 - 1e-10`` (A&S 16.15), the latter only where it holds (module notes):
-    elsewhere the AGM, with as many levels as it needs.
+    beyond, the descending Landen transformation from ``1 - m`` on the argument reduced
+    to ``[0, K/2]`` (within ~10 ulp of ``|f| + |u f'|``, where scipy fails).
 
     Parameters
     ----------
@@ -474,7 +477,8 @@ def free_flow_one(c, q, w, h):
 
     Parameters
     ----------
-    c : float64 array (7,)
+    c : float64 array (7,), like ``q`` and ``w`` C-contiguous (each other layout or
+        dtype compiles once more)
         ``[A, B, C, spherical, lam_on_tie, nu_sam, nu_lam]``: the moments scaled by a
         power of two and the flags (0 or 1) and characteristics of
         ``splitting._FreeConstants`` (its ``row``).
