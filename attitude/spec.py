@@ -640,6 +640,11 @@ def _rows(table: Table, prefix: str) -> list[str]:
             rows += _rows(key.table, f"{name}.")
         elif key.kind == "map":
             rows += _rows(key.table, f"{name}.<name>.")
+        elif key.kind == "tables" and key.variants:     # nested arrays of tables
+            for variant in key.variants:
+                rows += _rows(variant, f"{name}[{key.discriminator}={variant.name}].")
+        elif key.kind == "tables" and key.table is not None:
+            rows += _rows(key.table, f"{name}[].")
     return rows
 
 
