@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 from .body import MassProperties
+from .environment.config import TORQUE_TABLES as ENVIRONMENT_TORQUE_TABLES
 from .fitting.config import OBSERVATIONS
 from .photometry import config as photometry_config
 from .propagation.propagator import METHODS
@@ -29,8 +30,6 @@ from .torques import TORQUE_TABLES
 # --- the environment wing's [[torques]] types (issue 17): "solar_radiation", "drag" ------
 # declared in attitude.environment.config (which registers their builders with torques);
 # listed here so that the format does not depend on the order of imports
-from .environment.config import TORQUE_TABLES as ENVIRONMENT_TORQUE_TABLES  # noqa: E402
-
 _TORQUE_VARIANTS = tuple({**TORQUE_TABLES,
                           **{t.name: t for t in ENVIRONMENT_TORQUE_TABLES}}.values())
 # --- end of the environment block ------------------------------------------------------

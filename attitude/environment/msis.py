@@ -135,8 +135,7 @@ class MSISAtmosphere:
         return rho.reshape(shape)
 
     def density(self, altitude, *, latitude=0.0, longitude=0.0, time=None) -> np.ndarray:
-        """Density at ``altitude`` (m), kg/m^3, as
-        :meth:`ExponentialAtmosphere.density <attitude.environment.drag.ExponentialAtmosphere.density>`;
+        """Density at ``altitude`` (m), kg/m^3, as ``ExponentialAtmosphere.density``;
         at geodetic ``latitude`` and ``longitude`` (rad; default the equator at
         Greenwich, where the geodetic altitude is the altitude above the equatorial
         sphere) and ``time`` (default the epoch).
