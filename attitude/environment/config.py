@@ -151,8 +151,8 @@ _MSIS_KEYS = ("f107", "f107a", "ap")
 def _material(name: str, materials: dict, key: str) -> OpticalProperties:
     if name not in materials:
         known = ", ".join(materials) or "none given"
-        raise TorqueConfigError(f"unknown material {name!r}; name one of `materials` "
-                                f"({known})", key=key)
+        raise TorqueConfigError(f"unknown material {name!r}; name one of the table's "
+                                f"materials ({known})", key=key)
     return materials[name]
 
 
