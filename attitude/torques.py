@@ -1380,8 +1380,9 @@ ORBIT_TABLE = Table("orbit", (
     Key("epoch", "time", doc="when `mean_anomaly` holds; default the scenario epoch"),
     Key("tle", "any", schema={"type": "array", "items": {"type": "string"}, "minItems": 2,
                               "maxItems": 2},
-        doc="a two-line element set instead of the elements: SGP4 in GCRF "
-            "(attitude.environment.TLEOrbit; t = 0 at the scenario epoch)"),
+        doc="a two-line element set instead of the elements: SGP4 in GCRF (in the [state] "
+            "frame for solar_radiation and drag; attitude.environment.TLEOrbit; t = 0 at "
+            "the scenario epoch)"),
 ), exactly_one=(("a", "tle"),),
     excludes=(("tle", ("e", "i", "raan", "argp", "mean_anomaly", "epoch")),),
     doc="The body's orbit about the primary, inertial frame: Keplerian elements, or a "
