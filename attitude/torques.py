@@ -1694,6 +1694,9 @@ def from_config(table: Mapping, *, base_epoch=None,
                         vector = {value, unit} }``
     heavy_top           ``pivot_to_com`` (m, body frame); ``mass`` (kg, default the
                         body's); ``g`` (m/s2); ``up`` (inertial unit vector)
+    solar_radiation,    ``orbit``; ``facets`` (boxes, plates, facets) or the ``[body]``
+    drag                shape, named ``materials``; registered by
+                        :mod:`attitude.environment.config` (docs/environment.md)
     ==================  ====================================================================
 
     Parameters

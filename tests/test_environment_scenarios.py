@@ -310,6 +310,7 @@ BAD = [
     (("cd = 2.3", "cd = 2.3\nf107 = 150.0"), "torques[1].f107"),
     (("cd = 2.3", 'cd = 2.3\natmosphere = "msis"\nf107 = 150.0'), "torques[1].f107a"),
     (('shadow = "none"', 'shadow = "penumbra"'), "torques[0].shadow"),
+    (('frame = "GCRF"', 'frame = "ECLIPJ2000"'), "torques[0].orbit"),  # not Earth-centred
 ]
 
 

@@ -45,6 +45,7 @@ from ..surface import OpticalProperties, Surface
 from ..torques import EARTH_MU, ORBIT_TABLE, BuildContext, register_torque_type
 from .drag import AerodynamicDrag, ExponentialAtmosphere
 from .facets import Facets
+from .frames import check_frame
 from .msis import MSISAtmosphere
 from .radiation import SOLAR_PRESSURE_1AU, SolarRadiationPressure
 from .sun import SunPath
@@ -271,6 +272,11 @@ def _center_of_mass(values: dict, context: BuildContext) -> np.ndarray:
 
 
 def _orbit(values: dict, context: BuildContext):
+    try:
+        check_frame(context.frame)
+    except AttitudeError as err:
+        raise TorqueConfigError(f"the [state] frame: {err.reason} (the orbit, the Sun and "
+                                "the air are Earth-centred)", key="orbit") from None
     return context.orbit(values["orbit"], mu=values.get("mu", EARTH_MU))
 
 
@@ -292,11 +298,8 @@ def build_solar_radiation(values: dict, context: BuildContext) -> SolarRadiation
                                 "position)", key="orbit")
     facets = build_facets(values, context)
     orbit = _orbit(values, context)
-    try:
-        sun = context.shared(("sun", context.frame), lambda: SunPath(context.epoch,
-                                                                     frame=context.frame))
-    except AttitudeError as err:
-        raise TorqueConfigError(f"the [state] frame: {err.reason}", key="orbit") from None
+    sun = context.shared(("sun", context.frame), lambda: SunPath(context.epoch,
+                                                                 frame=context.frame))
     shadow = values.get("shadow", "conical")
     return SolarRadiationPressure(facets, sun=sun, orbit=orbit,
                                   shadow=None if shadow == "none" else shadow,
