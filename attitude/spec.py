@@ -640,6 +640,8 @@ def _rows(table: Table, prefix: str) -> list[str]:
             rows += _rows(key.table, f"{name}.")
         elif key.kind == "map":
             rows += _rows(key.table, f"{name}.<name>.")
+        elif key.kind == "tables" and key.table is not None and not key.variants:
+            rows += _rows(key.table, f"{name}[].")       # each table of the array
     return rows
 
 
@@ -687,6 +689,8 @@ def markdown(table: Table, *, level: int = 3) -> str:
             for k in sub.keys:
                 if k.kind == "table":
                     rules += [f"in `{k.name}`: {r}" for r in _rules_text(k.table)]
+                elif k.kind == "tables" and k.table is not None and not k.variants:
+                    rules += [f"in each `{k.name}[]`: {r}" for r in _rules_text(k.table)]
             if rules:
                 lines += ["", "Rules: " + "; ".join(rules) + "."]
             sections.append("\n".join(lines) + "\n")
