@@ -175,3 +175,38 @@ def test_bad_lightcurve_tables_name_the_key(tmp_path, capsys, old, new, key):
     assert main(["fit", str(path)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and key in lines[0], lines
+
+
+def test_an_alcdef_file_gives_sessions_errors_and_asteroid_times(tmp_path):
+    """The first two nights as ALCDEF blocks (MAGERR given, LTCAPP=NONE with each
+    night's mean light time): two sessions, the file's uncertainties, and times moved to
+    the asteroid by the reader, so no second light-time delay; they match the CSV's
+    emission times to within the change of the light time over a night (the distance
+    changes by < 20 km/s x 4.5 h: < 1.1 s)."""
+    csv_obs = load_scenario(SCENARIO).observations.observations[0]
+    epoch = TRUE_STATE.epoch
+    rows = [line.split(",") for line in DATA.read_text().splitlines()[2:]]
+    jd = np.array([float(r[0]) for r in rows])
+    mag = np.array([float(r[1]) for r in rows])
+    night = np.array([int(r[2]) for r in rows])
+    blocks = []
+    for k in (1, 2):
+        sel = night == k
+        ltc = csv_obs.delay[sel].mean() / 86400.0
+        blocks += ["STARTMETADATA", "OBJECTNAME=Synthetic NEA", "DELIMITER=PIPE",
+                   "LTCAPP=NONE", f"LTCDAYS={ltc:.9f}", "ENDMETADATA"]
+        blocks += [f"DATA={j:.8f}|{m:.4f}|0.015" for j, m in zip(jd[sel], mag[sel])]
+        blocks += ["ENDDATA"]
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "nea.alcdef").write_text("\n".join(blocks) + "\n")
+    text = SCENARIO.read_text().replace('file = "data/nea_lightcurve.csv"',
+                                        'file = "data/nea.alcdef"')
+    text = text.replace('sigma = "0.015 mag"', "")
+    (tmp_path / "alcdef.toml").write_text(text)
+    (obs,) = load_scenario(tmp_path / "alcdef.toml").observations.observations
+    n = int((night <= 2).sum())
+    assert obs.n_residuals == n and obs.n_nuisance == 2
+    np.testing.assert_array_equal(obs.sigma, np.full(n, 0.015))
+    np.testing.assert_array_equal(obs.delay, np.zeros(n))
+    emitted_csv = seconds_since(epoch, csv_obs.times)[night <= 2] - csv_obs.delay[night <= 2]
+    assert np.abs(seconds_since(epoch, obs.times) - emitted_csv).max() < 1.1
