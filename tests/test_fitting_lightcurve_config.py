@@ -124,6 +124,8 @@ def test_attitude_fit_recovers_the_state_and_the_zero_points(tmp_path, capsys):
     assert "converged" in text and "regime SAM" in text
     assert "chi2" in text and "for 165 degrees of freedom" in text     # 176 - 8 - 3
     assert cpu < 10.0, cpu              # about 1 s of CPU: from the guess only
+    assert "# Fitted by" in out.read_text() and "lightcurve 0 session 2: offset" \
+        in out.read_text()                          # the offsets, in the header comment
     fitted = load_scenario(out)
     p_fit, _ = free_parameters(fitted.body, fitted.state)
     p_true, _ = free_parameters(TRUE_BODY, TRUE_STATE)

@@ -346,6 +346,9 @@ def fitted_scenario(result: FitResult, *, name: str, duration: float, step: floa
         "# Parameters (1-sigma):",
         *(f"#   {k} = {result.parameters[k]:.10g} +- {result.uncertainties[k]:.3g}"
           for k in PARAMETERS),
+        *(f"#   lightcurve {n} session {label}: offset = {b:.6f} +- {sb:.2g} mag"
+          for n, lc in enumerate(result.lightcurve_offsets())
+          for label, b, sb in zip(lc["session"], lc["offset"], lc["sigma"])),
         "",
         "[scenario]",
         f'name = "{name} (fitted)"',
