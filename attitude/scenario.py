@@ -225,7 +225,8 @@ def load_scenario(path: str | Path) -> Scenario:
         folder=path.parent, fail=r.fail)
     observations = None                        # fitting wing: [observations]
     if "observations" in doc:
-        observations = parse_observations(doc["observations"], path.parent, path)
+        observations = parse_observations(doc["observations"], path.parent, path,
+                                          body=body, frame=state.frame)
     photometry = None                          # photometry wing: [photometry], its [expect]
     if "photometry" in doc:
         photometry = parse_photometry(doc["photometry"], doc.get("expect"), path, body)
