@@ -36,6 +36,8 @@ Examples
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..errors import AttitudeError, TorqueConfigError
@@ -214,8 +216,7 @@ def _shape_facets(values: dict, context: BuildContext, materials: dict,
     if context.shape is None:
         raise TorqueConfigError("missing: give facets = [ { type = \"box\", size = [...] }, "
                                 "... ] or a [body] shape model", key="facets")
-    folder = context.folder if context.folder is not None else "."
-    path = f"{folder}/{context.shape}"
+    path = Path(context.folder if context.folder is not None else ".") / context.shape
     shape = context.shared(("shape", path, context.length_unit), lambda: Polyhedron.from_obj(
         path, length_unit=context.length_unit))
     n = len(shape.faces)
