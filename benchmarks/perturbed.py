@@ -22,7 +22,8 @@ gravity gradient on a 7000 km orbit (e = 0.01, i = 51.6 deg), omega0 = [5e-4, -1
     reported, and so is the agreement of the two tools at Basilisk's finest dt.
 Case B: 100 such bodies (uniformly random attitudes, rates omega0 + N(0, 2e-4 rad/s)) in
 ONE batch call of ``att.propagate`` against 100 Basilisk simulations in a loop (each built
-and run), each at its case-A setting; errors checked on ``--check-bodies`` of them.
+and run), each at its case-A setting made finer until the first ``--check-bodies`` bodies
+(on which the errors are measured) pass too.
 Case C: an Envisat-like tumbler (|omega| = 0.0475 rad/s, period 132 s; assumed tensor and
 eddy-current tensor) in a 7143 km sun-synchronous orbit under gravity gradient and eddy
 currents in the tilted dipole, output every 600 s: the largest step (order 4) whose error
