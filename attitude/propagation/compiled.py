@@ -7,7 +7,7 @@ compiles them (``nopython``, no allocation), and so that they still run as plain
 when numba is absent or disabled:
 
 - :data:`NUMBA` is True when numba imports and ``ATTITUDE_NO_NUMBA=1`` is not set;
-- :func:`jit` is ``numba.njit(cache=True, error_model="numpy")`` then, else the
+- :func:`jit` is ``numba.njit(cache=True, nogil=True, error_model="numpy")`` then, else the
   identity.  No ``fastmath``: the compiled path must round as IEEE arithmetic does, so
   that it agrees with the numpy fallback to round-off (``tests/test_compiled.py``);
 - :func:`ellipj` (Jacobi ``sn, cn, dn``), :func:`elliprf` and :func:`elliprj`
@@ -95,9 +95,9 @@ def jit(function):
     if _NB is None:
         return function
     try:
-        return _NB.njit(cache=True, error_model="numpy")(function)
+        return _NB.njit(cache=True, nogil=True, error_model="numpy")(function)
     except RuntimeError:          # no file to cache it beside (typed at a prompt, doctest)
-        return _NB.njit(error_model="numpy")(function)
+        return _NB.njit(nogil=True, error_model="numpy")(function)
 
 
 # ===========================================================================

@@ -69,9 +69,11 @@ References
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time as _time
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from scipy import special as sp
@@ -1245,8 +1247,9 @@ def _compiled_specs(system: _System, body_list, t0: float, t: np.ndarray, suppor
 
 def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step, mode,
                   rtol, scheme, embedded, rk_order, w_floor, anchor, out_q, out_w, bar):
-    """Each body through :func:`attitude.propagation.compiled_loop.march_one` (the
-    progress bar moves body by body and direction by direction)."""
+    """Each body through :func:`attitude.propagation.compiled_loop.march_one`, the
+    bodies of a batch on a thread per core (the compiled loop releases the GIL); the
+    progress bar moves body by body."""
     flags = (bool(system.kick_terms), bool(system.drag_terms), bool(system.internal_terms))
     coeffs = (np.array(scheme.b), np.array(scheme.a))
     emb = embedded if embedded is not None else scheme
@@ -1256,7 +1259,8 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, ste
         low = min(scheme.order, emb.order)
         expo = 1.0 / (low + 1.0) if emb.order != scheme.order else 0.2
     h_limit = math.inf if step is None else h_max
-    for i, groups in enumerate(specs):
+
+    def run(i, groups):
         fc = np.array(system.free.row(i), dtype=float)
         frame = (np.ascontiguousarray(system.q_bp[i], dtype=float), system.identity,
                  np.ascontiguousarray(system.inv_moments[i], dtype=float))
@@ -1281,7 +1285,17 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, ste
                     "method='integrator'", key="rtol")
             out_q[i, idx] = oq
             out_w[i, idx] = ow
-            bar.update(abs(float(times[-1])) / len(specs))
+        return sum(abs(float(t[idx][-1])) for idx in segments) / len(specs)
+
+    workers = min(len(specs), os.cpu_count() or 1) if compiled_loop.NUMBA else 1
+    if workers <= 1:
+        for i, groups in enumerate(specs):
+            bar.update(run(i, groups))
+        return
+    # the compiled loop releases the GIL: the bodies of a batch run on all cores
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for done in [pool.submit(run, i, groups) for i, groups in enumerate(specs)]:
+            bar.update(done.result())
 
 
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
