@@ -9,6 +9,8 @@ script reruns the numerical test files
 * under another OpenBLAS kernel (``OPENBLAS_CORETYPE``), chosen from the CPU flags in
   ``/proc/cpuinfo`` so that it runs on this CPU and differs from the one OpenBLAS picks
   by itself (Haswell where AVX-512 is present, else Sandybridge, Nehalem or Prescott);
+* with numba switched off (``ATTITUDE_NO_NUMBA=1``), so that every propagation takes
+  the numpy path the first pass took compiled (issue 18: both paths agree to round-off);
 * with numpy's dispatched SIMD targets switched off (``NPY_DISABLE_CPU_FEATURES``), so
   that its loops (``sin``, ``exp``, ``sqrt``, sums) take the baseline code.  Only the
   targets numpy dispatches to *and* finds on this CPU can be disabled (numpy refuses to
@@ -36,7 +38,8 @@ NUMERIC_TESTS = [
     "tests/test_ensemble.py", "tests/test_ensemble_dask.py", "tests/test_torques.py",
     "tests/test_diagnostics.py", "tests/test_body.py", "tests/test_orbit.py",
     "tests/test_state.py", "tests/test_streaming.py", "tests/test_ephemeris.py",
-    "tests/test_events.py", "tests/tolerances.py",
+    "tests/test_events.py", "tests/tolerances.py", "tests/test_compiled.py",
+    "tests/test_compiled_torques.py", "tests/test_compiled_loop.py",
 ]
 
 
@@ -89,6 +92,9 @@ def environment(python: str = sys.executable) -> dict:
     env = dict(os.environ)
     env["CI"] = env.get("CI") or "1"                 # the derandomised hypothesis profile
     env["HYPOTHESIS_PROFILE"] = "ci"
+    # numba off: this pass runs the numpy fallback of the splitting integrator (and the
+    # compiled kernels as plain Python), the first pass ran the compiled loop
+    env["ATTITUDE_NO_NUMBA"] = "1"
     kernel = openblas_coretype(cpu_flags())
     if kernel:
         env["OPENBLAS_CORETYPE"] = kernel
