@@ -555,8 +555,11 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
     classification, note = None, ""
     if torques:
         try:
+            # the Lyapunov test re-propagates with the run's own splitting step
+            options = ({"step": scenario.integrator_step}
+                       if scenario.integrator_step is not None else None)
             classification = classify(eph, chaos=True, torques=torques,
-                                      require_periods=False)
+                                      require_periods=False, lyapunov_options=options)
         except (DiagnosticsError, AttitudeError) as exc:
             note = f"not classified: {exc}"
     conservation = eph.conservation()
