@@ -228,8 +228,8 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
         Seed of the random initial displacement direction.
     step : float, optional
         Longest step of ``method="splitting"``, s (the one the run itself used, e.g. a
-        scenario's ``integrator_step``); default :func:`~attitude.propagation.splitting.choose_step`.
-        Ignored by the other methods.
+        scenario's ``integrator_step``); default
+        :func:`~attitude.propagation.splitting.choose_step`.  Ignored by the other methods.
 
     Returns
     -------
