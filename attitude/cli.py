@@ -102,7 +102,8 @@ def _expectation_cells(e: dict) -> tuple[str, str, str, str]:
     else:
         expected, tolerance = f"<= {e['expected']:.3g}", "upper bound"
     got = "absent" if e["got"] is None else _number(e["got"]) + unit
-    return e["key"], expected, tolerance, got
+    key = e["key"] + (f" (at {e['at']})" if "at" in e else "")      # spin_period
+    return key, expected, tolerance, got
 
 
 def _expectation_line(e: dict) -> str:
