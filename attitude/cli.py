@@ -586,15 +586,17 @@ def _cmd_section(args) -> int:
     return EXIT_OK
 _FIT_HELP = """\
 Fit the rotation state (and moment ratios) of a scenario to its [observations]: the
-[body] and [state] are the first guess; attitude samples, body rates and periods (with
-their 1-sigma) are fitted by least squares with the exact torque-free solution, from the
-guess and its discrete alternatives (SAM/LAM mirror, psi0 + pi). Prints the parameters
+[body] and [state] are the first guess; attitude samples, body rates, periods and
+lightcurves (with their 1-sigma; one magnitude offset per lightcurve session) are
+fitted by least squares with the exact torque-free solution, from the guess and its
+discrete alternatives (SAM/LAM mirror, psi0 + pi). Prints the parameters
 with their 1-sigma, the regime and its margin; writes the best state as a scenario you
 can run ([observations].output or -o), and with --posterior the MCMC samples (emcee) as
 netCDF.
 
   attitude fit scenarios/tumbler_fit.toml
   attitude run scenarios/tumbler_fit_fit.toml
+  attitude fit scenarios/nea_lightcurve_fit.toml
 
 Exit codes: 0 a converged fit, 1 the fit did not converge (the reason is printed),
 2 bad input.
@@ -606,9 +608,10 @@ def _cmd_fit(args) -> int:
     cfg = scenario.observations
     if cfg is None:
         print(f"attitude: error: {args.scenario}: observations: the scenario has no "
-              "[observations] table (attitude, rates or periods)", file=sys.stderr)
+              "[observations] table (attitude, rates, periods or lightcurve)", file=sys.stderr)
         return EXIT_INPUT
-    result = fit(list(cfg.observations), scenario.body, scenario.state, free=cfg.free)
+    result = fit(list(cfg.observations), scenario.body, scenario.state, free=cfg.free,
+                 multistart=cfg.multistart)
     target = Path(args.output) if args.output else cfg.output
     text = fitted_scenario(result, name=scenario.name, duration=scenario.duration,
                            step=scenario.step, source=Path(args.scenario).name)
@@ -636,6 +639,10 @@ def _cmd_fit(args) -> int:
         if len(result.alternatives) > 1:
             alts = ", ".join(f"{r} chi2 {c:.4g}" for c, r in result.alternatives)
             print(f"  optima from the {len(result.alternatives)} starts: {alts}")
+        for k, lc in enumerate(result.lightcurve_offsets()):
+            print(f"  lightcurve {k} offsets (mag, one per session):")
+            for label, b, s in zip(lc["session"], lc["offset"], lc["sigma"]):
+                print(f"    session {label}  {b:.5f} +- {s:.2g}")
         if post is not None:
             print(f"  posterior: regime fractions {post.regime_fractions}, acceptance "
                   f"{post.acceptance_fraction:.2f}")

@@ -49,7 +49,7 @@ from .spindown import spin_trend
 from .spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
 from .state import AttitudeState, check_frame, spin_axis_quaternion
 from .tables import COLUMNS
-from .torques import from_config
+from .torques import BuildContext, from_config
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
            "spin_axis_state", "known_variables", "SCHEMA", "EXPECT_KEYS", "SCENARIO",
@@ -206,7 +206,10 @@ def load_scenario(path: str | Path) -> Scenario:
                      else "propagation.order",
                      "only used by the splitting integrator (method = \"splitting\", no rtol)")
 
-    torques = _torques(r, doc.get("torques", []), state.epoch)
+    body_table = doc.get("body", {})
+    torques = _torques(r, doc.get("torques", []), BuildContext(
+        epoch=state.epoch, frame=state.frame, folder=path.parent, body=body,
+        shape=body_table.get("shape"), length_unit=body_table.get("length_unit", "m")))
     if torques and method == "exact":
         raise r.fail("propagation.method", "'exact' is the torque-free solution; remove it "
                                            "(or use 'integrator') with [[torques]]")
@@ -223,7 +226,8 @@ def load_scenario(path: str | Path) -> Scenario:
         folder=path.parent, fail=r.fail)
     observations = None                        # fitting wing: [observations]
     if "observations" in doc:
-        observations = parse_observations(doc["observations"], path.parent, path)
+        observations = parse_observations(doc["observations"], path.parent, path,
+                                          body=body, frame=state.frame)
     photometry = None                          # photometry wing: [photometry], its [expect]
     if "photometry" in doc:
         photometry = parse_photometry(doc["photometry"], doc.get("expect"), path, body)
@@ -291,12 +295,13 @@ def _nominal(r: _Reader, ensemble) -> tuple[RigidBody, AttitudeState]:
     return ensemble.body_at(i), ensemble.state_at(i)
 
 
-def _torques(r: _Reader, tables, epoch) -> tuple:
-    """Each ``[[torques]]`` table becomes a torque model (see docs/torques.md)."""
+def _torques(r: _Reader, tables, context: BuildContext) -> tuple:
+    """Each ``[[torques]]`` table becomes a torque model (see docs/torques.md), built in
+    the scenario's context (epoch, frame, folder, body)."""
     models = []
     for i, table in enumerate(tables):
         try:
-            models.append(from_config(table, base_epoch=epoch))
+            models.append(from_config(table, context=context))
         except AttitudeError as exc:
             raise r.wrap(f"torques[{i}]", exc) from None
     return tuple(models)

@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 from .body import MassProperties
+from .environment.config import TORQUE_TABLES as ENVIRONMENT_TORQUE_TABLES
 from .fitting.config import OBSERVATIONS
 from .photometry import config as photometry_config
 from .propagation.propagator import METHODS
@@ -25,6 +26,13 @@ from .sampling import DIRECTION_SIGMA, MODELS
 from .spec import Key, Table
 from .spinorbit import section as spinorbit_section
 from .torques import TORQUE_TABLES
+
+# --- the environment wing's [[torques]] types (issue 17): "solar_radiation", "drag" ------
+# declared in attitude.environment.config (which registers their builders with torques);
+# listed here so that the format does not depend on the order of imports
+_TORQUE_VARIANTS = tuple({**TORQUE_TABLES,
+                          **{t.name: t for t in ENVIRONMENT_TORQUE_TABLES}}.values())
+# --- end of the environment block ------------------------------------------------------
 
 __all__ = ["SCENARIO", "ROTATION", "PART", "CONSERVATION_KEYS", "REDUCTIONS", "EXPECT_KEYS",
            "PRIMITIVE_NAMES", "SPIN_EXPECT_KEYS"]
@@ -239,7 +247,7 @@ SCENARIO = Table("", (
     Key("body", "table", table=BODY),
     Key("state", "table", table=STATE, required=True),
     Key("propagation", "table", table=PROPAGATION, required=True),
-    Key("torques", "tables", variants=tuple(TORQUE_TABLES.values()),
+    Key("torques", "tables", variants=_TORQUE_VARIANTS,
         doc="any number; they add (docs/torques.md)"),
     Key("events", "tables", variants=EVENT_TABLES,
         doc="located on the run and recorded in the ephemeris (event_time, event_name)"),

@@ -640,6 +640,11 @@ def _rows(table: Table, prefix: str) -> list[str]:
             rows += _rows(key.table, f"{name}.")
         elif key.kind == "map":
             rows += _rows(key.table, f"{name}.<name>.")
+        elif key.kind == "tables" and key.variants:     # nested arrays of tables
+            for variant in key.variants:
+                rows += _rows(variant, f"{name}[{key.discriminator}={variant.name}].")
+        elif key.kind == "tables" and key.table is not None:
+            rows += _rows(key.table, f"{name}[].")       # each table of the array
     return rows
 
 
@@ -687,6 +692,11 @@ def markdown(table: Table, *, level: int = 3) -> str:
             for k in sub.keys:
                 if k.kind == "table":
                     rules += [f"in `{k.name}`: {r}" for r in _rules_text(k.table)]
+                elif k.kind == "tables" and k.table is not None and not k.variants:
+                    rules += [f"in each `{k.name}[]`: {r}" for r in _rules_text(k.table)]
+                elif k.kind == "tables":
+                    rules += [f"in each `{k.name}[{k.discriminator}={v.name}]`: {r}"
+                              for v in k.variants for r in _rules_text(v)]
             if rules:
                 lines += ["", "Rules: " + "; ".join(rules) + "."]
             sections.append("\n".join(lines) + "\n")

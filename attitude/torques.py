@@ -61,6 +61,8 @@ import difflib
 import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
 
 import erfa
 import numpy as np
@@ -90,6 +92,8 @@ __all__ = [
     "TiltedDipoleField",
     "from_config",
     "TORQUE_TYPES",
+    "BuildContext",
+    "register_torque_type",
     "EARTH_MU",
     "EARTH_DIPOLE_MOMENT",
     "EARTH_DIPOLE_TILT",
@@ -1376,8 +1380,9 @@ ORBIT_TABLE = Table("orbit", (
     Key("epoch", "time", doc="when `mean_anomaly` holds; default the scenario epoch"),
     Key("tle", "any", schema={"type": "array", "items": {"type": "string"}, "minItems": 2,
                               "maxItems": 2},
-        doc="a two-line element set instead of the elements: SGP4 in GCRF "
-            "(attitude.environment.TLEOrbit; t = 0 at the scenario epoch)"),
+        doc="a two-line element set instead of the elements: SGP4 in GCRF (in the [state] "
+            "frame for solar_radiation and drag; attitude.environment.TLEOrbit; t = 0 at "
+            "the scenario epoch)"),
 ), exactly_one=(("a", "tle"),),
     excludes=(("tle", ("e", "i", "raan", "argp", "mean_anomaly", "epoch")),),
     doc="The body's orbit about the primary, inertial frame: Keplerian elements, or a "
@@ -1569,7 +1574,8 @@ def _heavy_top(table, base_epoch):
     return HeavyTopPivot(pivot_to_com=table["pivot_to_com"], **kwargs)
 
 
-#: ``type`` values of scenario ``[[torques]]`` tables and their builders.
+#: ``type`` values of scenario ``[[torques]]`` tables and their builders
+#: ``build(values, base_epoch)``.
 TORQUE_TYPES: dict[str, Callable] = {
     "gravity_gradient": _gravity_gradient,
     "constant": _constant,
@@ -1579,7 +1585,92 @@ TORQUE_TYPES: dict[str, Callable] = {
 }
 
 
-def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
+@dataclasses.dataclass(frozen=True, eq=False)
+class BuildContext:
+    """What a ``[[torques]]`` builder may need beyond its own table.
+
+    A scenario builds one context and passes it to every torque table it reads
+    (:func:`from_config`); builders registered with :func:`register_torque_type` receive
+    it whole, the built-in ones its ``epoch``.
+
+    Parameters
+    ----------
+    epoch : astropy Time, optional
+        The scenario epoch, ``t = 0``.
+    frame : str
+        Inertial frame of the states (the ``[state]`` frame).
+    folder : path-like, optional
+        Folder of the scenario file: file names in torque tables are relative to it.
+    body : RigidBody, optional
+        The scenario's body (its centre of mass: torques are taken about it).
+    shape : str, optional
+        The ``[body] shape`` file name (relative to ``folder``), when the body was given
+        by a shape model.
+    length_unit : str
+        Unit of the vertex coordinates of ``shape``.
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> ctx = BuildContext(epoch=Time("2024-03-01T00:00:00", scale="utc"), frame="GCRF")
+    >>> orbit_table = {"a": 7.0e6, "e": 0.001}
+    >>> ctx.orbit(orbit_table) is ctx.orbit(dict(orbit_table))   # built once, shared
+    True
+    """
+
+    epoch: Any = None
+    frame: str = "ICRF"
+    folder: Path | None = None
+    body: RigidBody | None = None
+    shape: str | None = None
+    length_unit: str = "m"
+    _shared: dict = dataclasses.field(default_factory=dict, init=False, repr=False)
+
+    def shared(self, key, build: Callable):
+        """``build()`` the first time ``key`` is asked for, the same object after: the
+        torques of one scenario share their orbit tables and the Sun's path, so each is
+        tabulated once and interpolated once per integrator stage."""
+        if key not in self._shared:
+            self._shared[key] = build()
+        return self._shared[key]
+
+    def orbit(self, table: Mapping, *, mu: float = EARTH_MU, key: str = "orbit"):
+        """The orbit of a validated ``orbit`` table (:data:`ORBIT_TABLE`): Keplerian
+        elements about ``mu``, or an element set through SGP4 in :attr:`frame` (needs
+        :mod:`attitude.environment`); equal tables give the same object."""
+        def build():
+            if "tle" in table and "tle" in ORBIT_SOURCES:
+                try:
+                    return ORBIT_SOURCES["tle"](table["tle"], self.epoch, self.frame)
+                except OrbitError as err:
+                    raise TorqueConfigError(err.reason, key=f"{key}.{err.key}") from None
+            return _orbit_from_table(table, mu, key, self.epoch)
+        memo = ("orbit", float(mu), tuple(sorted((k, repr(v)) for k, v in table.items())))
+        return self.shared(memo, build)
+
+
+#: Builders ``build(values, context)`` of the torque types a wing registers
+#: (:func:`register_torque_type`); they get the whole :class:`BuildContext`.
+_CONTEXT_BUILDERS: dict[str, Callable] = {}
+
+
+def register_torque_type(table: Table, build: Callable) -> None:
+    """Add a ``[[torques]]`` type declared outside this module (the environment wing's
+    ``"solar_radiation"`` and ``"drag"``): ``table`` (its keys, named ``table.name``) is
+    checked by :func:`from_config`, and ``build(values, context)`` gets the validated
+    values (SI) and the :class:`BuildContext`.
+
+    Examples
+    --------
+    >>> "solar_radiation" in TORQUE_TABLES       # registered by attitude.environment
+    True
+    """
+    TORQUE_TABLES[table.name] = table
+    _CONTEXT_BUILDERS[table.name] = build
+
+
+def from_config(table: Mapping, *, base_epoch=None,
+                context: BuildContext | None = None) -> TorqueModel:
     """Build a torque model from a scenario ``[[torques]]`` table.
 
     Quantities are numbers (SI), strings parsed by astropy (``"7000 km"``) or
@@ -1603,6 +1694,9 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
                         vector = {value, unit} }``
     heavy_top           ``pivot_to_com`` (m, body frame); ``mass`` (kg, default the
                         body's); ``g`` (m/s2); ``up`` (inertial unit vector)
+    solar_radiation,    ``orbit``; ``facets`` (boxes, plates, facets) or the ``[body]``
+    drag                shape, named ``materials``; registered by
+                        :mod:`attitude.environment.config` (docs/environment.md)
     ==================  ====================================================================
 
     Parameters
@@ -1612,6 +1706,10 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
     base_epoch : astropy Time, optional
         The scenario epoch (``t = 0``): used for ``orbit.epoch`` and the Earth rotation
         angle of the dipole field.
+    context : BuildContext, optional
+        What the scenario knows beyond the table (epoch, frame, folder, body); its
+        ``epoch`` is used when ``base_epoch`` is not given.  The environment's types
+        (``solar_radiation``, ``drag``; docs/environment.md) need it.
 
     Returns
     -------
@@ -1643,15 +1741,19 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
     if not isinstance(table, Mapping):
         raise TorqueConfigError(f"expected a table with a 'type' key, got "
                                 f"{type(table).__name__}", key="type")
+    kinds = [*TORQUE_TYPES, *_CONTEXT_BUILDERS]
     if "type" not in table:
-        raise TorqueConfigError(f"missing; choose one of {', '.join(TORQUE_TYPES)}", key="type")
+        raise TorqueConfigError(f"missing; choose one of {', '.join(kinds)}", key="type")
     kind = table["type"]
-    if not isinstance(kind, str) or kind not in TORQUE_TYPES:
-        near = difflib.get_close_matches(kind, list(TORQUE_TYPES), n=1) if isinstance(
-            kind, str) else []
+    if not isinstance(kind, str) or kind not in kinds:
+        near = difflib.get_close_matches(kind, kinds, n=1) if isinstance(kind, str) else []
         did = f"did you mean {near[0]!r}? " if near else ""
         raise TorqueConfigError(f"unknown torque type {kind!r}; {did}choose one of "
-                                f"{', '.join(TORQUE_TYPES)}", key="type")
+                                f"{', '.join(kinds)}", key="type")
+    if context is None:
+        context = BuildContext(epoch=base_epoch)
+    elif base_epoch is None:
+        base_epoch = context.epoch
     orbit = table.get("orbit")
     if base_epoch is not None and isinstance(orbit, Mapping) and isinstance(
             orbit.get("epoch"), str):     # an orbit epoch is read in the scenario's scale
@@ -1659,4 +1761,6 @@ def from_config(table: Mapping, *, base_epoch=None) -> TorqueModel:
                                                        "scale": base_epoch.scale}}}
     values = validate(table, TORQUE_TABLES[kind].with_keys(Key("type", "string")),
                       error=TorqueConfigError)
+    if kind in _CONTEXT_BUILDERS:
+        return _CONTEXT_BUILDERS[kind](values, context)
     return TORQUE_TYPES[kind](values, base_epoch)

@@ -12,6 +12,7 @@ feeds randomly mutated shipped scenarios to the command: exit 0/1/2/3, never a t
 from __future__ import annotations
 
 import copy
+import importlib.util
 import json
 import math
 import tomllib
@@ -181,7 +182,46 @@ BASES = {
         "state": {"epoch": "2030-01-01T00:00:00", "omega_body": [0.0, 0.0, 1e-4]},
         "propagation": {"duration": "1 min", "step": "10 s"},
     },
+    # the environment's torque types (issue 17): facets of every kind, named materials
+    "environment": {
+        "body": {"principal_moments": [100.0, 120.0, 150.0]},
+        "state": {"epoch": "2016-10-19T00:00:00", "time_scale": "utc", "frame": "GCRF",
+                  "omega_body": [0.0, 0.0, 0.1]},
+        "propagation": {"duration": "1 min", "step": "10 s"},
+        "torques": [
+            {"type": "solar_radiation", "orbit": {"a": "7715 km", "i": "66 deg"},
+             "mu": "3.986004418e14 m3/s2", "shadow": "cylindrical",
+             "pressure": "4.56e-6 N/m2", "center_of_mass": [0.0, 0.01, 0.0],
+             "material": "mli",
+             "materials": {"mli": {"specular": 0.3, "diffuse": 0.1},
+                           "cells": {"specular": 0.05, "diffuse": 0.05}},
+             "facets": [{"type": "box", "size": [1.0, 1.0, 2.0], "center": [0.0, 0.0, 0.1],
+                         "material": "mli"},
+                        {"type": "plate", "area": "4 m2", "normal": [1.0, 0.0, 1.0],
+                         "center": [0.0, 2.0, 0.0], "material": "cells",
+                         "back_material": "mli"},
+                        {"type": "facet", "area": 0.5, "normal": [0.0, 0.0, 1.0],
+                         "center": [0.0, 0.0, 1.2], "specular": 0.2, "diffuse": 0.3}]},
+            {"type": "drag", "orbit": {"a": "6778 km", "i": "51.6 deg"}, "cd": 2.2,
+             "atmosphere": "exponential", "corotation": True,
+             "facets": [{"type": "box", "size": [1.0, 1.0, 2.0]}]},
+        ],
+    },
+    "environment_shape": {
+        "body": {"shape": "cube.obj", "density": "2.6 g/cm3"},
+        "state": {"epoch": "2016-10-19T00:00:00", "time_scale": "utc", "frame": "GCRF",
+                  "omega_body": [0.0, 0.0, 1e-4]},
+        "propagation": {"duration": "1 min", "step": "10 s"},
+        "torques": [
+            {"type": "solar_radiation", "orbit": {"a": "7715 km", "i": "66 deg"},
+             "materials": {"white": {"specular": 0.0, "diffuse": 0.8}},
+             "surface": [{"faces": [0, 4], "material": "white"}]},
+        ],
+    },
 }
+if importlib.util.find_spec("pymsis") is not None:    # the msis extra: its keys too
+    BASES["environment"]["torques"][1].update(atmosphere="msis", f107=150.0, f107a=140.0,
+                                              ap=15.0)
 
 CSV = "name,A [kg m2],B,C,qx,qy,qz,qw,wx [deg/s],wy,wz\nx,1,2,3,0,0,0,1,1,0,0.001\n"
 CUBE_OBJ = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
@@ -293,6 +333,13 @@ def _set(doc, path, value):
     target[path[-1]] = value
 
 
+def _delete(doc, path):
+    target = doc
+    for part in path[:-1]:
+        target = target[part]
+    del target[path[-1]]
+
+
 def _key_text(path) -> str:
     out = ""
     for part in path:
@@ -331,6 +378,20 @@ ISSUE = [
     ("single", ("body", "principal_moments"), [1.0, 1.0, 3.0]),
     ("single", ("torques", 0, "orbit", "e"), 1.5),
     ("single", ("events", 0, "angle"), "200 deg"),
+    # the environment's torques: a facet of zero area, an unknown material, no orbit,
+    # a zero normal, reflectances adding up to more than 1, face ranges off the shape
+    ("environment", ("torques", 0, "facets", 2, "area"), 0.0),
+    ("environment", ("torques", 0, "facets", 1, "material"), "gold"),
+    ("environment", ("torques", 0, "facets", 1, "back_material"), "gold"),
+    ("environment", ("torques", 0, "material"), "gold"),
+    ("environment", ("torques", 0, "orbit"), None),
+    ("environment", ("torques", 1, "orbit"), None),
+    ("environment", ("torques", 0, "facets", 1, "normal"), [0.0, 0.0, 0.0]),
+    ("environment", ("torques", 0, "materials", "mli", "diffuse"), 0.9),
+    ("environment", ("torques", 0, "facets"), []),
+    ("environment_shape", ("torques", 0, "surface", 0, "faces"), [0, 13]),
+    ("environment_shape", ("torques", 0, "surface", 0, "material"), "black"),
+    ("euler", ("torques",), [{"type": "drag", "orbit": {"a": "7000 km"}}]),
 ]
 
 
@@ -339,6 +400,8 @@ ISSUE = [
 def test_every_bad_value_exits_2_naming_file_and_key(tmp_path, capsys, base, path, bad):
     doc = copy.deepcopy(BASES[base])
     _set(doc, path, bad)
+    if bad is None:                     # a missing key
+        _delete(doc, path)
     scenario = _write(tmp_path, doc)
     code = main(["run", str(scenario), "--quiet", "-o", str(tmp_path / "o.nc")])
     err = capsys.readouterr().err

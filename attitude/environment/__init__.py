@@ -12,7 +12,9 @@ before a propagation calls it at every step.
   Earth hides (cylindrical or conical shadow, with the penumbra);
 - :class:`SolarRadiationPressure` and :class:`AerodynamicDrag` -- torques of sunlight
   and of the upper atmosphere on the facets of a body (:class:`Facets`, from the same
-  surface description photometry uses), with :class:`ExponentialAtmosphere`.
+  surface description photometry uses), with :class:`ExponentialAtmosphere` or NRLMSIS
+  (:class:`MSISAtmosphere`, ``pymsis``: the ``msis`` extra); in scenario files the
+  ``[[torques]]`` types ``"solar_radiation"`` and ``"drag"`` (:mod:`.config`).
 
 The packages ``sgp4`` and ``ppigrf`` come with the ``environment`` extra
 (``pip install "attitude-dynamics[environment]"``).
@@ -24,17 +26,18 @@ from .drag import VALLADO_EXPONENTIAL_TABLE, AerodynamicDrag, ExponentialAtmosph
 from .facets import Facets
 from .frames import EARTH_FRAMES, inertial_to_earth_fixed, teme_to_inertial
 from .igrf import IGRF, IGRF_VALIDITY
+from .msis import MSISAtmosphere
 from .radiation import ASTRONOMICAL_UNIT, SOLAR_PRESSURE_1AU, SolarRadiationPressure
 from .sun import EARTH_RADIUS, SUN_RADIUS, SunPath, illumination
 from .tabulation import TimeTable
 from .tle import TLEOrbit
 
 
-def _tle_source(lines, base_epoch):
+def _tle_source(lines, base_epoch, frame="GCRF"):
     if not (isinstance(lines, (list, tuple)) and len(lines) == 2):
         raise OrbitError("expected the two lines of the element set, [line1, line2]",
                          key="tle")
-    return TLEOrbit(*lines, epoch=base_epoch)
+    return TLEOrbit(*lines, epoch=base_epoch, frame=frame)
 
 
 def _igrf_source(orbit, base_epoch, max_degree):
@@ -48,6 +51,8 @@ _torques.FIELD_SOURCES["igrf"] = _igrf_source
 # live here, in the wing; torques cannot import them without a cycle)
 _torques.SolarRadiationPressure = SolarRadiationPressure
 _torques.AerodynamicDrag = AerodynamicDrag
+# [[torques]] types "solar_radiation" and "drag" (registered with the torques module)
+from . import config as _config  # noqa: E402,F401  (after the names above: it uses them)
 
 __all__ = [
     "TLEOrbit",
@@ -65,6 +70,7 @@ __all__ = [
     "SolarRadiationPressure",
     "AerodynamicDrag",
     "ExponentialAtmosphere",
+    "MSISAtmosphere",
     "VALLADO_EXPONENTIAL_TABLE",
     "SOLAR_PRESSURE_1AU",
     "ASTRONOMICAL_UNIT",

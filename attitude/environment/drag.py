@@ -17,9 +17,10 @@ is ``M = -1/2 rho v^2 C_D (sum_k A_k c_k r_k) x v_hat``.
 :class:`ExponentialAtmosphere` is Vallado's piecewise-exponential density model (2013,
 Table 8-4, after CIRA-72 / the US Standard Atmosphere 1976): a base altitude, nominal
 density and scale height per layer, ``rho = rho_0 exp(-(h - h_0) / H)``.  Any callable
-``altitude (m) -> density (kg/m^3)`` can replace it.  (NRLMSIS through ``pymsis`` is
-not wired in: it needs the time, latitude, longitude and the solar and geomagnetic
-indices, not just the altitude.)
+``altitude (m) -> density (kg/m^3)`` can replace it.  A model that depends on the time
+and the place as well gives the density along the orbit through an ``along(orbit,
+epoch=, frame=)`` method returning a function of ``t``: NRLMSIS,
+:class:`~attitude.environment.msis.MSISAtmosphere` (``pymsis``, the ``msis`` extra).
 
 References
 ----------
@@ -137,15 +138,22 @@ class AerodynamicDrag(EnvironmentTorque):
     orbit : TLEOrbit, KeplerOrbit or anything with ``position(t)`` and ``velocity(t)``
         Inertial, geocentric, m and m/s; the frame's ``z`` axis along the Earth's axis
         (GCRF, EME2000, TEME: the tilt of the pole by precession is neglected).
-    density : ExponentialAtmosphere or callable
+    density : ExponentialAtmosphere, MSISAtmosphere or callable
         ``density(altitude) -> kg/m^3``, altitude in m above a sphere of the Earth's
-        equatorial radius.
+        equatorial radius; or a model with ``along(orbit, epoch=, frame=)`` (the density
+        along the orbit as a function of ``t``, e.g. NRLMSIS).
     cd : float
         Drag coefficient (2.2, the customary free-molecular value for a flat plate).
     center_of_mass : 3-vector, m
         In the coordinates of the facets.
     corotation : bool
         Subtract the velocity of the co-rotating air (default True).
+    epoch : astropy Time, optional
+        Time ``t = 0`` for a density model that depends on the time (default
+        ``orbit.epoch``).
+    frame : str, optional
+        Inertial frame of the orbit, for such a model (default ``orbit.frame``, else
+        ``"GCRF"``).
 
     Raises
     ------
@@ -174,7 +182,8 @@ class AerodynamicDrag(EnvironmentTorque):
     velocity_dependent = False
 
     def __init__(self, shape, orbit, *, density=None, cd=2.2,
-                 center_of_mass=(0.0, 0.0, 0.0), corotation: bool = True):
+                 center_of_mass=(0.0, 0.0, 0.0), corotation: bool = True, epoch=None,
+                 frame: str | None = None):
         self.facets: Facets = as_facets(shape)
         if orbit is None or not callable(getattr(orbit, "velocity", None)):
             raise TorqueConfigError("drag needs the orbit's velocity: give a TLEOrbit, "
@@ -190,7 +199,16 @@ class AerodynamicDrag(EnvironmentTorque):
         self.center_of_mass = check_vector(center_of_mass, "center_of_mass")
         self.corotation = bool(corotation)
         self._omega_earth = np.array([-1.0, 1.0, 0.0]) * EARTH_ROTATION_RATE
-        self._check_density(np.array([200e3, 400e3, 800e3]))
+        self._density_path = None
+        if callable(getattr(self.density, "along", None)):   # time and place: NRLMSIS
+            epoch = getattr(orbit, "epoch", None) if epoch is None else epoch
+            if epoch is None:
+                raise TorqueConfigError("the density model depends on the time: pass "
+                                        "epoch= or an orbit with an epoch", key="epoch")
+            frame = getattr(orbit, "frame", "GCRF") if frame is None else frame
+            self._density_path = self.density.along(self.orbit, epoch=epoch, frame=frame)
+        else:
+            self._check_density(np.array([200e3, 400e3, 800e3]))
         f = self.facets
         self._r = f.centroids - self.center_of_mass
         self._ar = f.areas[:, None] * self._r                     # (n, 3): A_k r_k
@@ -216,8 +234,10 @@ class AerodynamicDrag(EnvironmentTorque):
         v = np.asarray(self.orbit.velocity(t), dtype=float)
         if self.corotation:
             v = v - self._omega_earth * r[..., [1, 0, 2]]   # omega_E x r = w (-y, x, 0)
-        altitude = np.sqrt(np.sum(r * r, axis=-1)) - EARTH_RADIUS
-        rho = self._check_density(altitude)
+        if self._density_path is not None:
+            rho = self._density_path(t)
+        else:
+            rho = self._check_density(np.sqrt(np.sum(r * r, axis=-1)) - EARTH_RADIUS)
         return v, 0.5 * rho * np.sum(v * v, axis=-1) * self.cd
 
     def _weights(self, t, quaternion):
@@ -241,8 +261,11 @@ class AerodynamicDrag(EnvironmentTorque):
         vx, vy, vz = np.asarray(self.orbit.velocity(t), dtype=float).tolist()
         if self.corotation:
             vx, vy = vx + EARTH_ROTATION_RATE * y, vy - EARTH_ROTATION_RATE * x
-        rho = float(self._check_density(np.float64(math.sqrt(x * x + y * y + z * z)
-                                                   - EARTH_RADIUS)))
+        if self._density_path is not None:
+            rho = float(self._density_path(t))
+        else:
+            rho = float(self._check_density(np.float64(math.sqrt(x * x + y * y + z * z)
+                                                       - EARTH_RADIUS)))
         v2 = vx * vx + vy * vy + vz * vz
         if v2 == 0.0 or rho == 0.0:
             return np.zeros(3)

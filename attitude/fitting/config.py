@@ -9,14 +9,33 @@ what was measured::
                                                                # qx, qy, qz, qw
     rates = { file = "gyro.csv", sigma = "1e-4 rad/s" }        # t or time, wx, wy, wz
     periods = { precession = { value = 27.38, sigma = 0.07, unit = "h" } }
+    multistart = true                       # also from the guess's mirror and psi0 + pi
     output = "fitted.toml"                  # the best state as a scenario (default
                                             # <scenario>_fit.toml)
     posterior = { walkers = 32, steps = 2000, seed = 1, netcdf = "posterior.nc" }
 
-Times in the files are seconds since the ``[state]`` epoch (column ``t``) or ISO 8601
-dates in UTC (column ``time``).  Lightcurves are fitted from Python
-(:class:`~attitude.fitting.LightcurveObservations`); a scenario key for them is future
-work.
+    [[observations.lightcurve]]             # any number of them
+    file = "night1-3.csv"      # ALCDEF or CSV (attitude.read_lightcurve: jd / mjd / time,
+                               # mag, optional mag_err and session columns)
+    sigma = "0.02 mag"         # 1-sigma where the file gives none
+    sessions = true            # one magnitude offset per session of the file (default)
+    shape = "ellipsoid"        # from the body's moments (or axes = [...]), or an OBJ file
+    subdivisions = 2           # ellipsoid mesh: 20 * 4**n faces
+    law = "ls-lambert"         # or { name = "hapke", w = 0.3, ... }
+    sun = [1.0, 0.0, 0.0]      # fixed directions body -> Sun and body -> observer in
+    observer = [0.9, 0.4, 0.1] # the [state] frame; or, per epoch from the target's orbit:
+    # orbit = { mu = "1.32712440018e20 m3/s2", a = "1.1 AU", e = 0.2, ... }
+    # observer = "earth"       # (default with an orbit); light_time = true
+
+Times in the attitude and rate files are seconds since the ``[state]`` epoch (column
+``t``) or ISO 8601 dates in UTC (column ``time``); lightcurve files carry their own
+dates (UTC JD, MJD or ISO).  The lightcurve keys ``shape``, ``axes``, ``length_unit``,
+``subdivisions``, ``law``, ``sun``, ``observer``, ``orbit`` and ``light_time`` mean what
+they mean in ``[photometry]`` (:mod:`attitude.photometry.config`).  Light time: with an
+orbit and ``light_time = true`` the attitude is modelled at the emission times (the
+file's times minus the light time) -- except for ALCDEF files, whose reader already
+moves the times to the asteroid (``LTCAPP``/``LTCDAYS``), so their times are used as
+they are.
 """
 
 from __future__ import annotations
@@ -26,19 +45,65 @@ from pathlib import Path
 
 import numpy as np
 from astropy import units as u
-from astropy.time import Time
+from astropy.time import Time, TimeDelta
 
 from ..errors import AttitudeError, ScenarioError
+from ..photometry.config import PHOTOMETRY_SCHEMA, parse_photometry
+from ..photometry.geometry import Geometry
+from ..photometry.readers import read_lightcurve
 from ..regimes import PERIOD_KEYS
 from ..spec import Key, Table
 from ..state import format_epoch
 from .leastsq import FitResult
-from .observations import AngularVelocityObservations, AttitudeObservations, PeriodObservations
+from .observations import (
+    AngularVelocityObservations,
+    AttitudeObservations,
+    LightcurveObservations,
+    PeriodObservations,
+)
 from .parameters import PARAMETERS
 
-__all__ = ["OBSERVATIONS", "ObservationsConfig", "parse_observations", "fitted_scenario"]
+__all__ = ["OBSERVATIONS", "LIGHTCURVE", "ObservationsConfig", "parse_observations",
+           "fitted_scenario"]
 
 _FILE = (Key("file", "string", required=True, doc="CSV, path relative to the scenario"),)
+_PHOTOMETRY = PHOTOMETRY_SCHEMA["properties"]
+#: The keys of a lightcurve that mean what they mean in ``[photometry]``.
+_PHOTOMETRY_KEYS = ("shape", "axes", "length_unit", "subdivisions", "law", "sun",
+                    "observer", "orbit", "light_time")
+
+#: One ``[[observations.lightcurve]]`` table.
+LIGHTCURVE = Table("lightcurve", (
+    Key("file", "string", required=True,
+        doc="ALCDEF or CSV (attitude.read_lightcurve), path relative to the scenario"),
+    Key("format", "string", choices=("alcdef", "csv"), doc="default: from the file"),
+    Key("sigma", "quantity", unit="mag", positive=True,
+        doc="magnitude 1-sigma where the file gives none"),
+    Key("sessions", "boolean", default=True,
+        doc="one magnitude offset per session of the file (false: one for all)"),
+    Key("shape", "string", default="ellipsoid",
+        doc="\"ellipsoid\" (from the body's moments, or axes) or an OBJ file"),
+    Key("axes", "quantity", unit="m", shape=(3,), positive=True,
+        doc="shape = \"ellipsoid\": explicit semi-axes"),
+    Key("subdivisions", "integer", bounds=(0, 8), default=2,
+        doc="ellipsoid mesh: 20 * 4**n faces"),
+    Key("length_unit", "unit", unit="m", default="m", doc="of the OBJ coordinates"),
+    Key("law", "any", schema=_PHOTOMETRY["law"], default="ls-lambert",
+        doc="scattering law: a name or { name = ..., parameters } (docs/photometry.md)"),
+    Key("sun", "quantity", unit="", shape=(3,),
+        doc="fixed direction body -> Sun, [state] frame"),
+    Key("observer", "any", schema=_PHOTOMETRY["observer"],
+        doc="fixed direction body -> observer; with an orbit \"earth\" (default) or "
+            "\"sun\""),
+    Key("orbit", "any", schema=_PHOTOMETRY["orbit"],
+        doc="the target's heliocentric Kepler elements: { mu, a, e, i, raan, argp, "
+            "mean_anomaly } (geometry per epoch)"),
+    Key("light_time", "boolean", default=True,
+        doc="with an orbit: model the attitude at the emission times"),
+), exactly_one=(("sun", "orbit"),), needs=(("sun", ("observer",)),
+                                          ("light_time", ("orbit",))),
+    doc="A lightcurve: the magnitudes, the shape and scattering law that make them, and the "
+        "Sun/observer geometry (fixed vectors, or from the target's orbit).")
 
 #: The ``[observations]`` table (declared in :data:`attitude.scenario_spec.SCENARIO`).
 OBSERVATIONS = Table("observations", (
@@ -52,12 +117,17 @@ OBSERVATIONS = Table("observations", (
     Key("rates", "table", table=Table("rates", _FILE + (
         Key("sigma", "quantity", unit="rad/s", required=True, positive=True),)),
         doc="body rates: columns t or time, wx, wy, wz (rad/s)"),
+    Key("lightcurve", "tables", table=LIGHTCURVE,
+        doc="lightcurves [[observations.lightcurve]]: one offset per session"),
     Key("periods", "table", table=Table("periods", tuple(
         Key(k, "table", table=Table(k, (
             Key("value", "number", required=True, positive=True),
             Key("sigma", "number", required=True, positive=True),
             Key("unit", "unit", unit="s", default="s"))), doc=f"the {k} period")
         for k in PERIOD_KEYS)), doc="measured periods with their 1-sigma"),
+    Key("multistart", "boolean", default=True,
+        doc="also start from the guess's discrete alternatives (SAM/LAM mirror, psi0 + "
+            "pi); false: from the guess only, when it is known to be close"),
     Key("output", "string", doc="the best state as a scenario file; default "
                                 "<scenario>_fit.toml"),
     Key("posterior", "table", table=Table("posterior", (
@@ -88,6 +158,7 @@ class ObservationsConfig:
     output: Path
     posterior: dict | None
     posterior_netcdf: Path | None
+    multistart: bool = True
 
 
 def _csv(folder: Path, spec: dict, where: str, columns: tuple, path):
@@ -116,8 +187,65 @@ def _csv(folder: Path, spec: dict, where: str, columns: tuple, path):
     return times, values
 
 
-def parse_observations(table: dict, folder: Path, scenario_path: Path) -> ObservationsConfig:
+def _lightcurve(spec: dict, where: str, folder: Path, path: str, body, frame: str):
+    """One ``[[observations.lightcurve]]`` table -> LightcurveObservations."""
+    file = folder / spec["file"]
+    try:
+        lc = read_lightcurve(file, format=spec.get("format"))
+    except AttitudeError as exc:            # LightcurveFormatError: the file and the line
+        line = f"{exc.key}: " if exc.key else ""
+        raise ScenarioError(f"{file.name}: {line}{exc.reason}", key=f"{where}.file",
+                            path=path) from None
+    alcdef = lc.dataset.attrs.get("format") == "ALCDEF"
+    # shape, law and geometry: the [photometry] reader, its errors re-keyed
+    sub = {k: spec[k] for k in _PHOTOMETRY_KEYS if k in spec}
+    sub.setdefault("shape", "ellipsoid")
+    sub.setdefault("subdivisions", 2)
+    sub.setdefault("law", "ls-lambert")
+    if "sun" in sub:
+        sub["sun"] = [float(x) for x in sub["sun"]]
+    if sub["shape"] == "ellipsoid" and "axes" not in sub and body is None:
+        raise ScenarioError("shape = \"ellipsoid\" takes the body's moments: give [body] "
+                            "or axes", key=f"{where}.shape", path=path)
+    try:
+        cfg = parse_photometry(sub, None, Path(path), body)
+    except ScenarioError as exc:
+        key = (exc.key or "").replace("photometry", where, 1)
+        raise ScenarioError(exc.reason, key=key, path=path) from None
+    times = lc.epoch + TimeDelta(lc.time, format="sec")
+    g = cfg.geometry
+    if "orbit" in g:
+        try:
+            geom = Geometry.from_orbit(g["orbit"], times, g["observer"], frame=frame,
+                                       light_time=g["light_time"])
+        except AttitudeError as exc:
+            raise ScenarioError(exc.reason, key=f"{where}.orbit", path=path) from None
+        if alcdef:                          # the reader moved the times to the asteroid
+            geom = Geometry(sun=geom.sun, observer=geom.observer,
+                            sun_distance=geom.sun_distance,
+                            observer_distance=geom.observer_distance, frame=frame)
+    else:
+        geom = Geometry(sun=g["sun"], observer=g["observer"], frame=frame)
+    err = np.asarray(lc.dataset["magnitude_error"].values, dtype=float)
+    missing = ~(np.isfinite(err) & (err > 0))
+    if np.any(missing):
+        if "sigma" not in spec:
+            raise ScenarioError(f"{file.name} gives no magnitude uncertainty for "
+                                f"{int(missing.sum())} of {err.size} points: give sigma "
+                                f"(e.g. \"0.02 mag\")", key=f"{where}.sigma", path=path)
+        err = np.where(missing, spec["sigma"], err)
+    sessions = np.asarray(lc.dataset["session"].values) if spec.get("sessions", True) \
+        else None
+    return LightcurveObservations(times, lc.magnitude, err, geom, cfg.shape, cfg.law,
+                                  sessions=sessions)
+
+
+def parse_observations(table: dict, folder: Path, scenario_path: Path, *, body=None,
+                       frame: str = "ICRF") -> ObservationsConfig:
     """Observation objects from a validated ``[observations]`` table.
+
+    ``body`` (the first guess) makes the shape ``"ellipsoid"`` of a lightcurve; ``frame``
+    is the inertial frame of the ``[state]`` (the Sun and observer directions are in it).
 
     Raises
     ------
@@ -155,14 +283,17 @@ def parse_observations(table: dict, folder: Path, scenario_path: Path) -> Observ
                          v["sigma"] * u.Unit(v.get("unit", "s")))
                      for k, v in table["periods"].items()}
             obs.append(PeriodObservations(**pairs))
+        for k, spec in enumerate(table.get("lightcurve") or ()):
+            obs.append(_lightcurve(spec, f"observations.lightcurve[{k}]", folder, path,
+                                   body, frame))
     except ScenarioError:
         raise
     except AttitudeError as exc:  # the observation objects' keyed errors, under the table
         raise ScenarioError(exc.reason, key=f"observations.{exc.key}" if exc.key
                             else "observations", path=path) from None
     if not obs:
-        raise ScenarioError("give attitude, rates or periods", key="observations",
-                            path=path)
+        raise ScenarioError("give attitude, rates, periods or [[observations.lightcurve]]",
+                            key="observations", path=path)
     free = table.get("free")
     if free is not None:
         if not (isinstance(free, list) and free and all(isinstance(f, str) for f in free)):
@@ -181,7 +312,8 @@ def parse_observations(table: dict, folder: Path, scenario_path: Path) -> Observ
     if post is not None:
         netcdf = folder / post["netcdf"] if "netcdf" in post else \
             Path(f"{stem}_posterior.nc")
-    return ObservationsConfig(tuple(obs), free, output, post, netcdf)
+    return ObservationsConfig(tuple(obs), free, output, post, netcdf,
+                              bool(table.get("multistart", True)))
 
 
 def _vector(v) -> str:
@@ -214,6 +346,9 @@ def fitted_scenario(result: FitResult, *, name: str, duration: float, step: floa
         "# Parameters (1-sigma):",
         *(f"#   {k} = {result.parameters[k]:.10g} +- {result.uncertainties[k]:.3g}"
           for k in PARAMETERS),
+        *(f"#   lightcurve {n} session {label}: offset = {b:.6f} +- {sb:.2g} mag"
+          for n, lc in enumerate(result.lightcurve_offsets())
+          for label, b, sb in zip(lc["session"], lc["offset"], lc["sigma"])),
         "",
         "[scenario]",
         f'name = "{name} (fitted)"',

@@ -24,7 +24,7 @@ from scipy.optimize import least_squares
 from ..body import RigidBody
 from ..errors import AttitudeError
 from ..state import AttitudeState
-from .observations import seconds_since
+from .observations import LightcurveObservations, seconds_since
 from .parameters import ANGLES, PARAMETERS, RotationModel, free_parameters
 
 __all__ = ["FitResult", "fit", "Objective"]
@@ -234,6 +234,68 @@ class FitResult:
             rows.append(f"  {name:22s} {value * scale:14.8g} +- {sigma * scale:.3g} {unit}"
                         f"{mark}")
         return "\n".join(rows)
+
+
+    def lightcurve_offsets(self) -> tuple:
+        """The magnitude offset of every session of every lightcurve, with its 1-sigma.
+
+        The offsets were profiled out of the fit (the weighted mean residual of each
+        session, :class:`~attitude.fitting.LightcurveObservations`); their variance is
+        that of a weighted mean, ``1 / sum(w)``, plus what the uncertainty of the
+        rotation parameters carries into it, ``g^T C g`` (``g`` the derivative of the
+        offset by the free parameters, central differences as for the Jacobian; the
+        two are uncorrelated: the fit sees only the residuals with the session means
+        removed).
+
+        Returns
+        -------
+        tuple of dict
+            One per lightcurve, in the order of the observations: ``session`` (labels),
+            ``offset`` and ``sigma`` (mag), arrays in the order of the labels.
+
+        Examples
+        --------
+        >>> import numpy as np, attitude as att
+        >>> from scipy.spatial.transform import Rotation
+        >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+        >>> truth = att.AttitudeState("2029-04-13", Rotation.from_rotvec([0.3, -0.2, 1.0]),
+        ...                           [0.05, 0.1, 1.0])
+        >>> shape = att.Polyhedron.ellipsoid_from_moments(body.principal_moments,
+        ...                                               subdivisions=1)
+        >>> geom = att.Geometry(sun=[1.0, 0, 0], observer=[np.cos(0.4), np.sin(0.4), 0.2])
+        >>> t = np.linspace(0.0, 60.0, 120)
+        >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
+        >>> night = (t > 30.0).astype(int)                   # two sessions
+        >>> clean = att.LightcurveObservations(t, np.zeros(t.size), 0.01, geom, shape)
+        >>> mag = clean.model_magnitudes(q[None])[0] + np.where(night, 12.3, 11.8)
+        >>> obs = att.LightcurveObservations(t, mag, 0.01, geom, shape, sessions=night)
+        >>> res = att.fit(obs, body, truth, free=["phi0", "psi0"], multistart=False)
+        >>> res.dof                                # 120 magnitudes - 2 angles - 2 offsets
+        116
+        >>> (lc,) = res.lightcurve_offsets()
+        >>> lc["session"].tolist(), lc["offset"].round(6).tolist()
+        ([0, 1], [11.8, 12.3])
+        >>> bool(np.all(lc["sigma"] < 0.01))
+        True
+        """
+        obj = self.objective
+        values = np.array([self.parameters[n] for n in PARAMETERS])
+        x = values[list(obj.free)]
+        h = np.maximum(np.finfo(float).eps ** (1 / 3) * np.abs(x), 1e-8)
+        k = x.size
+        xs = np.vstack([x[None], x + np.diag(h), x - np.diag(h)])
+        v, _ = project(obj.full(xs))
+        q, _ = obj.model.evaluate(v, obj.times)
+        out = []
+        for o, s in zip(obj.observations, obj.slices):
+            if not isinstance(o, LightcurveObservations):
+                continue
+            b = o.offsets(q[:, s])                                   # (1 + 2k, S)
+            g = (b[1:k + 1] - b[k + 1:]) / (2 * h[:, None])          # (k, S)
+            var = 1.0 / o.session_weight + np.einsum("ks,kl,ls->s", g, self.covariance, g)
+            out.append({"session": o.session_labels, "offset": b[0],
+                        "sigma": np.sqrt(var)})
+        return tuple(out)
 
 
 def _starts(p0: np.ndarray, free: tuple) -> list[np.ndarray]:
