@@ -81,11 +81,11 @@ Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation faile
 """
 
 
-def _format_seconds(s: float) -> str:
+def _format_seconds(s: float, digits: int = 10) -> str:
     for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
         if abs(s) >= 2 * size:
-            return f"{s / size:.10g} {unit}"
-    return f"{s:.10g} s"
+            return f"{s / size:.{digits}g} {unit}"
+    return f"{s:.{digits}g} s"
 
 
 def _number(x) -> str:
@@ -102,7 +102,8 @@ def _expectation_cells(e: dict) -> tuple[str, str, str, str]:
     else:
         expected, tolerance = f"<= {e['expected']:.3g}", "upper bound"
     got = "absent" if e["got"] is None else _number(e["got"]) + unit
-    return e["key"], expected, tolerance, got
+    key = e["key"] + (f" (at {e['at']})" if "at" in e else "")      # spin_period
+    return key, expected, tolerance, got
 
 
 def _expectation_line(e: dict) -> str:
@@ -162,12 +163,31 @@ def _summary_rows(result) -> list[tuple[str, str]]:
                  f"max |L - L0|/|L0| = {c['angular_momentum_rel_drift']:.2g}; "
                  f"E0 = {d.kinetic_energy:.10g} J, max |E - E0|/E0 = "
                  f"{c['energy_rel_drift']:.2g}"))
+    spin = result.spin                   # the spin period and its trend (issue 17)
+    if spin is not None:
+        rows.append(("Spin", _spin_text(spin, bool(sc.torques))))
     if sc.events:
         found = event_table(eph)
         rows.append(("Events", f"{len(found)} found" + (": " + ", ".join(
             f"{name} at {_format_seconds(t)}" for t, name in found[:5]) if found else "")
             + (f", ... ({len(found) - 5} more in the ephemeris)" if len(found) > 5 else "")))
     return rows
+
+
+def _spin_text(spin, torques: bool) -> str:
+    """``period 134.74 s -> 134.89 s; trend +75.0 +/- 0.4 ms/day, e-folding 4.92 yr``."""
+    text = f"period 2 pi |L|/2E: {_format_seconds(spin.period_start, 7)}"
+    if not torques:
+        return text + " (constant without torques)"
+    text += (f" at start, {_format_seconds(spin.period_end, 7)} at end; trend "
+             f"{spin.trend_ms_per_day:+.4g} +/- {spin.trend_stderr * 86.4e6:.2g} ms/day "
+             f"(least squares over the run)")
+    if math.isfinite(spin.efolding):
+        years = abs(spin.efolding) / 31557600.0
+        size = f"{years:.4g} yr" if years >= 2 else _format_seconds(abs(spin.efolding), 4)
+        text += (f", {'e-folding' if spin.efolding > 0 else 'spin-up e-folding'} "
+                 f"{size}")
+    return text
 
 
 def _ensemble_rows(result, run: tuple[str, str]) -> list[tuple[str, str]]:

@@ -119,7 +119,7 @@ def _batch_means(g: np.ndarray) -> float:
 
 
 def _ftle(body, state, torques, duration, intervals, separation, rate_scale, method,
-          rtol, seed):
+          rtol, seed, step=None):
     tau = duration / intervals
     rng = np.random.default_rng(seed)
     v = rng.normal(size=6)
@@ -139,7 +139,7 @@ def _ftle(body, state, torques, duration, intervals, separation, rate_scale, met
     # once, as a single propagation would), each trajectory on the one-body fast path
     apart = bool(torques) and method == "splitting"
     if apart:
-        kwargs["step"] = choose_step(body, q, w, torques)
+        kwargs["step"] = choose_step(body, q, w, torques) if step is None else step
     for k in range(intervals):
         t0 = k * tau
         tq_k = [_shift_torque(x, t0) for x in torques] if torques else None
@@ -172,7 +172,8 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
                       duration, *, intervals: int = 64, separation: float = 1e-8,
                       rate_scale: float | None = None, method: str | None = None,
                       rtol="auto", control="torque-free", seed: int = 0,
-                      thresholds: Thresholds | None = None) -> LyapunovResult:
+                      thresholds: Thresholds | None = None,
+                      step: float | None = None) -> LyapunovResult:
     r"""Finite-time maximal Lyapunov exponent of a propagated rotation, with a control.
 
     Two nearby trajectories (Benettin et al. 1980): the reference from ``state`` and a
@@ -225,6 +226,10 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
         ``(body, state, torques)`` tuple.
     seed : int
         Seed of the random initial displacement direction.
+    step : float, optional
+        Longest step of ``method="splitting"``, s (the one the run itself used, e.g. a
+        scenario's ``integrator_step``); default
+        :func:`~attitude.propagation.splitting.choose_step`.  Ignored by the other methods.
 
     Returns
     -------
@@ -262,7 +267,7 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
             raise ClassificationError(f"rtol must be a number, None or 'auto', got {rtol!r}")
         rtol = 1e-10 if torques and method == "integrator" else None
     local, tau = _ftle(body, state, torques, duration, int(intervals), separation,
-                       rate_scale, method, rtol if torques else None, seed)
+                       rate_scale, method, rtol if torques else None, seed, step)
     lam = float(local.mean())
     sig = _batch_means(local)
     c_local = None
@@ -274,7 +279,7 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
             cb, cs, ct = control
             ct = list(ct or [])
         c_local, _ = _ftle(cb, cs, ct, duration, int(intervals), separation, rate_scale,
-                           None if not ct else method, rtol if ct else None, seed)
+                           None if not ct else method, rtol if ct else None, seed, step)
         lam_c = float(c_local.mean())
         sig_c = _batch_means(c_local)
     comb = math.hypot(sig, sig_c or 0.0)

@@ -43,8 +43,9 @@ from .regimes import PERIOD_KEYS
 from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
 from .sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
 from .sampling import MODELS
-from .scenario_spec import CONSERVATION_KEYS, EXPECT_KEYS, REDUCTIONS, SCENARIO
+from .scenario_spec import CONSERVATION_KEYS, EXPECT_KEYS, REDUCTIONS, SCENARIO, SPIN_EXPECT_KEYS
 from .spec import Key, Table, json_schema, markdown, validate
+from .spindown import spin_trend
 from .spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
 from .state import AttitudeState, check_frame, spin_axis_quaternion
 from .tables import COLUMNS
@@ -457,7 +458,9 @@ class RunResult:
     >>> round(result.periods["polhode"], 4)         # the T-handle flips back every 3.31 s
     3.3108
     >>> sorted(result.report())
-    ['conservation', 'expect', 'outputs', 'periods', 'regime', 'scenario']
+    ['conservation', 'expect', 'outputs', 'periods', 'regime', 'scenario', 'spin']
+    >>> round(result.spin.period_start, 4)         # 2 pi |L| / 2E, s
+    0.5
     """
 
     scenario: Scenario
@@ -473,6 +476,9 @@ class RunResult:
     the :func:`~attitude.diagnostics.add_diagnostics` variables when needed), or None."""
     ensemble: dict | None = None
     """Summary of an ensemble run (:func:`ensemble_summary`), or None."""
+    spin: Any = None
+    """The spin period at the ends of the run and its trend
+    (:class:`attitude.spindown.SpinTrend`), or None (an ensemble, a body at rest)."""
 
     @property
     def ok(self) -> bool:
@@ -512,6 +518,8 @@ class RunResult:
         }
         if self.ensemble is not None:
             doc["ensemble"] = self.ensemble
+        if self.spin is not None:
+            doc["spin"] = self.spin.as_dict()
         return doc
 
 
@@ -552,8 +560,11 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
     classification, note = None, ""
     if torques:
         try:
+            # the Lyapunov test re-propagates with the run's own splitting step
+            options = ({"step": scenario.integrator_step}
+                       if scenario.integrator_step is not None else None)
             classification = classify(eph, chaos=True, torques=torques,
-                                      require_periods=False)
+                                      require_periods=False, lyapunov_options=options)
         except (DiagnosticsError, AttitudeError) as exc:
             note = f"not classified: {exc}"
     conservation = eph.conservation()
@@ -566,11 +577,16 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
             dataset = add_diagnostics(eph, periods=need == "periods").dataset
         except (DiagnosticsError, AttitudeError) as exc:
             note = (note + "; " if note else "") + f"no diagnostics: {exc}"
+    try:                                   # the spin period and its trend (issue 17)
+        spin = spin_trend(eph)
+    except (DiagnosticsError, AttitudeError) as exc:
+        spin = None
+        note = (note + "; " if note else "") + f"no spin trend: {exc}"
     result = RunResult(scenario, eph, diagnosis, classification, conservation, [], [], note,
-                       dataset)
+                       dataset, spin=spin)
     result.expectations.extend(check_expectations(
         scenario, result.regime, result.periods, conservation, diagnosis=diagnosis,
-        dataset=dataset,
+        dataset=dataset, spin=spin,
         spinorbit=spinorbit_section.expectation_values(scenario, eph)))  # spin-orbit wing
     target = Path(netcdf) if netcdf is not None else scenario.netcdf
     if target is not None and write_outputs:
@@ -771,6 +787,15 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
             continue           # photometry wing: parsed by attitude.photometry.config
         elif key in spinorbit_section.EXPECT_KEYS:          # spin-orbit wing
             parsed.append(spinorbit_section.parse_expect(key, spec, r.fail))
+        elif key in SPIN_EXPECT_KEYS:                      # issue 17: attitude.spindown
+            value = spec["value"]
+            unit = spec.get("unit", {"spin_period": "s", "spin_period_trend": "ms/day",
+                                     "spin_down_efolding": "d"}[key])
+            entry = {"key": key, "expected": value, "unit": unit,
+                     "tolerance": _tolerance(spec, value)}
+            if key == "spin_period":
+                entry["at"] = spec.get("at", "end")
+            parsed.append(entry)
         elif key == "regime_fractions":
             for regime, frac in spec.items():
                 parsed.append({"key": f"regime_fractions.{regime}", "expected": frac["value"],
@@ -825,14 +850,15 @@ def _variable_value(dataset, spec: dict) -> float | None:
 def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
                        conservation: dict, *, diagnosis=None, dataset=None,
                        fractions: dict | None = None,
-                       spinorbit: dict | None = None) -> list[dict]:
+                       spinorbit: dict | None = None, spin=None) -> list[dict]:
     """Compare the parsed ``[expect]`` entries with what the run gave.
 
     ``diagnosis`` (:func:`attitude.diagnose` of the initial state) gives the nutation range
     of a torque-free run; ``dataset`` (the run's ephemeris dataset, with the variables of
     :func:`attitude.diagnostics.add_diagnostics` when :func:`needs_dataset` says so) the
     nutation range of a run with torques (extremes of ``nutation_angle`` over the run) and
-    the ``[expect.variables]`` values.  Without them those entries get ``got = None``
+    the ``[expect.variables]`` values; ``spin`` (:class:`attitude.spindown.SpinTrend`)
+    the spin period and its trend.  Without them those entries get ``got = None``
     (a failure).
 
     Examples
@@ -850,7 +876,8 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
     results = []
     for spec in scenario.expect:
         key = spec["key"]
-        out = {k: v for k, v in spec.items() if k not in ("variable", "at", "component")}
+        out = {k: v for k, v in spec.items() if k not in ("variable", "at", "component")
+               or key == "spin_period"}
         if key == "resonance":                        # spin-orbit wing: a "p:q" string
             out["got"] = (spinorbit or {}).get(key)
             out["ok"] = out["got"] == spec["expected"]
@@ -873,6 +900,8 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
             got = None if fractions is None else fractions.get(key.split(".", 1)[1], 0.0)
         elif key == "libration_amplitude":            # spin-orbit wing
             got = (spinorbit or {}).get(key)
+        elif key in SPIN_EXPECT_KEYS:                 # issue 17: attitude.spindown
+            got = None if spin is None else _spin_value(spin, spec)
         else:
             out["got"] = conservation[key]
             out["ok"] = bool(out["got"] <= spec["expected"])
@@ -883,6 +912,18 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
                          abs(got - spec["expected"]) <= spec["tolerance"])
         results.append(out)
     return results
+
+
+def _spin_value(spin, spec: dict) -> float:
+    """The spin period (at ``start`` / ``end``), its trend or its e-folding time, in the
+    expectation's unit."""
+    key = spec["key"]
+    if key == "spin_period":
+        seconds = spin.period_start if spec["at"] == "start" else spin.period_end
+        return float((seconds * u.s).to_value(spec["unit"]))
+    if key == "spin_period_trend":
+        return float((spin.trend * u.dimensionless_unscaled).to_value(spec["unit"]))
+    return float((spin.efolding * u.s).to_value(spec["unit"]))
 
 
 def _nutation_bound(scenario: Scenario, which: str, diagnosis, dataset) -> float | None:

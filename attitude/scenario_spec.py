@@ -35,7 +35,7 @@ _TORQUE_VARIANTS = tuple({**TORQUE_TABLES,
 # --- end of the environment block ------------------------------------------------------
 
 __all__ = ["SCENARIO", "ROTATION", "PART", "CONSERVATION_KEYS", "REDUCTIONS", "EXPECT_KEYS",
-           "PRIMITIVE_NAMES"]
+           "PRIMITIVE_NAMES", "SPIN_EXPECT_KEYS"]
 
 #: Largest relative changes over a run that ``[expect]`` may bound.
 CONSERVATION_KEYS = ("angular_momentum_rel_drift", "energy_rel_drift")
@@ -152,6 +152,30 @@ _VARIABLE = Table("variable", (
     Key("unit", "unit", doc="default: the variable's unit"),
     *_TOLERANCE), exactly_one=_ONE_TOLERANCE)
 
+# --- the spin period and its trend (attitude.spindown; issue 17) ---
+#: ``[expect]`` keys on the spin period of a run and its least-squares trend.
+SPIN_EXPECT_KEYS = ("spin_period", "spin_period_trend", "spin_down_efolding")
+_SPIN_EXPECT = (
+    Key("spin_period", "table", table=Table("spin_period", (
+        Key("value", "number", required=True), Key("unit", "unit", unit="s", default="s"),
+        Key("at", "string", choices=("start", "end"), default="end",
+            doc="the first or last epoch"),
+        *_TOLERANCE), exactly_one=_ONE_TOLERANCE),
+        doc="spin period 2 pi L / (2 E), 2 pi / omega for a principal-axis spin "
+            "(attitude.spindown)"),
+    Key("spin_period_trend", "table", table=Table("spin_period_trend", (
+        Key("value", "number", required=True),
+        Key("unit", "unit", unit="", default="ms/day", doc="e.g. ms/day, s/yr"),
+        *_TOLERANCE), exactly_one=_ONE_TOLERANCE),
+        doc="dP/dt, least-squares slope of the spin period over the run"),
+    Key("spin_down_efolding", "table", table=Table("spin_down_efolding", (
+        Key("value", "number", required=True), Key("unit", "unit", unit="s", default="d"),
+        *_TOLERANCE), exactly_one=_ONE_TOLERANCE),
+        doc="1 / (d ln P / dt) over the run: tau of P = P0 exp(t / tau); negative for a "
+            "spin-up"),
+)
+# --- end spin period ---
+
 _FRACTION = Table("fraction", (
     Key("value", "number", required=True, bounds=(0.0, 1.0)), *_TOLERANCE),
     exactly_one=_ONE_TOLERANCE)
@@ -168,6 +192,7 @@ EXPECT = Table("expect", (
         Key("abs_tol", "number", required=True, nonnegative=True)))),
     Key("variables", "map", table=_VARIABLE,
         doc="dataset variables reduced over the run"),
+    *_SPIN_EXPECT,                           # the spin period and its trend (issue 17)
     Key("regime_fractions", "map", table=_FRACTION, choices=REGIMES,
         nonempty=True, doc="[ensemble] only: fraction of the valid bodies per regime"),
     # the wings' keys: checked by their parsers (spinorbit.section, photometry.config)

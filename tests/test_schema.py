@@ -17,6 +17,7 @@ from attitude.scenario import (
     scenario_reference,
     scenario_schema,
 )
+from attitude.scenario_spec import SPIN_EXPECT_KEYS
 from tests.test_scenario import GOOD
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +55,7 @@ def test_schema_keys_match_the_loader():
     assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS, "nutation_range",
                            "variables", "regime_fractions",
                            "libration_amplitude", "resonance",
-                           *LIGHTCURVE_EXPECT_KEYS} == set(EXPECT_KEYS)
+                           *LIGHTCURVE_EXPECT_KEYS, *SPIN_EXPECT_KEYS} == set(EXPECT_KEYS)
     assert expect["regime"]["enum"] == list(REGIMES)
 
 
