@@ -190,3 +190,25 @@ def test_numba_flag_is_what_the_platform_offers():
         assert not compiled_loop.NUMBA
     else:
         assert compiled_loop.NUMBA == (os.environ.get("ATTITUDE_NO_NUMBA") != "1")
+
+
+@pytest.mark.skipif(not compiled_loop.NUMBA, reason="numba's cache only exists with numba")
+def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
+    """numba checks only a function's own file: the package clears the cached code of
+    its kernels when any of the three modules changes (the loop inlines the others)."""
+    import hashlib
+    from pathlib import Path
+
+    from attitude.propagation import compiled
+
+    here = Path(compiled.__file__).parent
+    stamp = here / "__pycache__" / "attitude-kernels.sha1"
+    digest = hashlib.sha1(b"".join((here / n).read_bytes()
+                                   for n in compiled.KERNEL_MODULES)).hexdigest()
+    if stamp.is_file():                  # absent only where the folder is read-only
+        assert stamp.read_text() == digest
+        stale = here / "__pycache__" / "compiled_loop.stale-test.nbi"
+        stale.write_text("x")
+        stamp.write_text("changed")
+        compiled._drop_stale_cache()
+        assert not stale.exists() and stamp.read_text() == digest

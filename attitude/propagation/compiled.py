@@ -41,8 +41,10 @@ References
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
+from pathlib import Path
 
 from .. import freebody as fb
 from .. import quaternion as quat
@@ -69,7 +71,37 @@ def _numba():
     return numba
 
 
+#: The modules whose jitted functions call one another.  numba's cache checks only the
+#: source file of the function it loads, so a loop compiled against an older torque
+#: kernel would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
+#: cached code of all three when any of them changes.
+KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py")
+
+
+def _drop_stale_cache() -> None:
+    """Delete numba's cached code of :data:`KERNEL_MODULES` when their sources changed
+    (a stamp of their SHA-1 beside the cache); silent where the folder is read-only."""
+    here = Path(__file__).parent
+    folder = here / "__pycache__"
+    try:
+        digest = hashlib.sha1(b"".join((here / name).read_bytes()
+                                       for name in KERNEL_MODULES)).hexdigest()
+        stamp = folder / "attitude-kernels.sha1"
+        if stamp.is_file() and stamp.read_text() == digest:
+            return
+        folder.mkdir(exist_ok=True)
+        for name in KERNEL_MODULES:
+            for pattern in (f"{name[:-3]}.*.nbi", f"{name[:-3]}.*.nbc"):
+                for old in folder.glob(pattern):
+                    old.unlink()
+        stamp.write_text(digest)
+    except OSError:           # read-only install: numba uses its own cache folder then
+        return
+
+
 _NB = _numba()
+if _NB is not None:
+    _drop_stale_cache()
 #: True when the kernels below are compiled by numba (importable and not disabled by the
 #: environment variable ``ATTITUDE_NO_NUMBA=1``); False: they run as plain Python.
 NUMBA = _NB is not None
