@@ -1451,7 +1451,7 @@ class MagneticDipole(TorqueModel):
     about a principal axis of moment ``I`` normal to both oscillates at
     ``sqrt(|m| |B| / I)``.  Satellites carry residual dipoles of order 0.1-1 A m^2
     (an assumption unless measured: Inamori et al. 2011 estimate one in flight), which
-    in a LEO field of ~3e-5 T gives torques of order 1e-6-1e-5 N m.
+    in a LEO field of 2e-5-5.5e-5 T gives torques up to ``|m| |B|`` ~ 2e-6-5e-5 N m.
 
     Parameters
     ----------
