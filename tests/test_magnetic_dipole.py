@@ -82,6 +82,31 @@ def test_torque_is_m_cross_b_in_body_axes():
     assert along(0.0, [0, 0, 0, 1], np.zeros(3), SAT).tolist() == [0.0, 0.0, 0.0]
 
 
+def test_vectorised_call_equals_per_element_call():
+    """Stacked ``(n,)``, ``(n, 4)``, ``(n, 3)`` == n single calls; a scalar time with
+    stacked attitudes, a Rotation stack, a sequence of bodies and unnormalised
+    quaternions (integrators pass raw stage values) give the same torques."""
+    model = MagneticDipole(MOMENT, TiltedDipoleField(LEO, rotation_angle=0.7))
+    t, q, w = _random_states(3, 6)
+    stacked = model(t, q, w, SAT)
+    assert stacked.shape == (6, 3)
+    scale = np.linalg.norm(MOMENT) * 6e-5
+
+    def agree(a, b, what):
+        assert_agree(a, b, ulps=TORQUE_EVAL, magnitude=scale, what=what)
+
+    for k in range(6):
+        single = model(float(t[k]), q[k], w[k], SAT)
+        assert single.shape == (3,)
+        agree(stacked[k], single, f"element {k}")
+    agree(model(t[0], q, w, SAT)[2], model(t[0], q[2], w[2], SAT), "scalar time")
+    agree(model(t, Rotation.from_quat(q), w, SAT), stacked, "Rotation stack")
+    agree(model(t, q, w, [SAT] * 6), stacked, "sequence of bodies")
+    agree(model(t, 1.001 * q, w, SAT), stacked, "unnormalised quaternions")
+    agree(model.potential(t, q), -np.einsum("i,ni->n", MOMENT, Rotation.from_quat(q).inv()
+                                            .apply(model.field(t))), "potential")
+
+
 def test_torque_is_minus_the_gradient_of_the_potential():
     """``M . e = -dV/dphi`` for a rotation by ``phi`` about any body axis ``e``
     (central differences, error ~ (h^2 / 6) |V'''| + eps |V| / h)."""
