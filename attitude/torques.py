@@ -1465,7 +1465,7 @@ class MagneticDipole(TorqueModel):
     References
     ----------
     .. [1] Wertz, J. R. (ed.) (1978). *Spacecraft Attitude Determination and Control*.
-       Reidel. Sec. 17.2 (environmental torques: the magnetic disturbance torque).
+       Reidel (environmental torques: the magnetic disturbance torque).
     .. [2] Inamori, T., Sako, N. & Nakasuka, S. (2011). Magnetic dipole moment
        estimation and compensation for an accurate attitude control in nano-satellite
        missions. *Acta Astronautica* 68, 2038-2046.
