@@ -67,8 +67,10 @@ def torque_cost(hours: float, method: str = "splitting"):
     rows = []
     for name, torques in (("gravity gradient alone", [gg]),
                           ("+ SRP + drag + eddy currents (IGRF)", full)):
-        start = time.perf_counter()
         options = {"rtol": 1e-10} if method == "integrator" else {}
+        # warm-up: numba compiles the loop for these torques on the first call (cached)
+        att.propagate(body, state, times[:3], torques=torques, method=method, **options)
+        start = time.perf_counter()
         eph = att.propagate(body, state, times, torques=torques, method=method, **options)
         wall = time.perf_counter() - start
         w = eph.dataset["angular_velocity"].values
