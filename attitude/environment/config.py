@@ -203,14 +203,6 @@ def _one_facet(entry: dict, materials: dict, default: OpticalProperties, key: st
                         diffuse=optics.diffuse, back=(back.specular, back.diffuse))
 
 
-def _joined(parts: list) -> Facets:
-    return Facets(np.concatenate([f.areas for f in parts]),
-                  np.concatenate([f.normals for f in parts]),
-                  np.concatenate([f.centroids for f in parts]),
-                  np.concatenate([f.specular for f in parts]),
-                  np.concatenate([f.diffuse for f in parts]))
-
-
 def _shape_facets(values: dict, context: BuildContext, materials: dict,
                   default: OpticalProperties) -> Facets:
     if context.shape is None:
@@ -260,7 +252,7 @@ def build_facets(values: dict, context: BuildContext) -> Facets:
         return _shape_facets(values, context, materials, default)
     if not values["facets"]:
         raise TorqueConfigError("expected at least one box, plate or facet", key="facets")
-    return _joined([_one_facet(entry, materials, default, f"facets[{i}]")
+    return Facets.join([_one_facet(entry, materials, default, f"facets[{i}]")
                     for i, entry in enumerate(values["facets"])])
 
 
