@@ -91,7 +91,8 @@ FACET_TABLES = (
     Table("facet", (
         Key("area", "quantity", unit="m2", positive=True),
         *_OUTLINE, _NORMAL, _CENTER, *_OPTICS,
-    ), excludes=_OPTICS_RULE, exactly_one=(("area", "size"),), doc="one flat facet, lit or hit on its outward side only"),
+    ), excludes=_OPTICS_RULE, exactly_one=(("area", "size"),),
+        doc="one flat facet, lit or hit on its outward side only"),
 )
 
 #: A named material: ``materials = { name = { specular, diffuse } }``.

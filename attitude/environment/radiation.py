@@ -69,7 +69,7 @@ from ..errors import TorqueConfigError
 from ..orbit import as_path
 from ..quantities import to_si
 from ..quaternion import cross
-from ..raycast import OFFSET_RTOL, Occluder
+from ..raycast import OFFSET_RTOL, Occluder, load_embree
 from .facets import Facets, as_facets
 from .sun import EARTH_RADIUS, SHADOW_MODELS, SUN_RADIUS, illumination
 from .torquebase import EnvironmentTorque, check_vector
@@ -338,7 +338,9 @@ class _ShadedFacets:
             c = facets.centroids[start:start + 256]
             height[start:start + 256] = np.max(corners @ n.T, axis=0) - np.sum(c * n, 1)
         self.index = np.flatnonzero(height > 1e-9 * extent)
+        # embree is asked for even when no facet can be shadowed: the setting needs it
         self.occluder = None
+        load_embree("self_shadowing", "self_shadowing = false")
         if self.index.size:
             self.occluder = Occluder(tris, key="self_shadowing",
                                      switch="self_shadowing = false")
