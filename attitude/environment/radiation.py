@@ -180,6 +180,25 @@ class SolarRadiationPressure(EnvironmentTorque):
             self._spec = self._spec * keep
             self._diff = self._diff * keep
 
+    @property
+    def shadeable(self) -> np.ndarray:
+        """Indices of the facets the rest of the body can shade (some corner of the body
+        in front of their plane): those whose rays are cast; empty without
+        ``self_shadowing`` and for a convex body.
+
+        Examples
+        --------
+        >>> from attitude.environment import Facets
+        >>> pair = Facets.join([Facets.plate(1.0, [1, 0, 0], [1.0, 0, 0]),
+        ...                     Facets.plate(1.0, [1, 0, 0], [0.0, 0, 0])])
+        >>> SolarRadiationPressure(pair, sun=[1.5e11, 0, 0], orbit=[0, 0, 0],
+        ...                        self_shadowing=True).shadeable   # facing each other
+        array([1, 2])
+        """
+        if self._shaded is None:
+            return np.zeros(0, dtype=int)
+        return self._shaded.index.copy()
+
     def sunlight(self, t):
         """``(s_inertial, p)``: unit vector from the body to the Sun (inertial) and the
         pressure there times the visible fraction of the solar disk, N/m^2."""
