@@ -14,6 +14,7 @@ import pytest
 import attitude as att
 from attitude.environment import Facets, SolarRadiationPressure
 from attitude.environment.facets import rectangle, triangle_areas
+from attitude.environment.radiation import AUTO_MAX_SUBDIVISION, AUTO_SPACING
 from attitude.errors import MissingDependencyError, TorqueConfigError
 from attitude.propagation.compiled_torques import compile_torques
 from attitude.quaternion import rotate
@@ -92,12 +93,13 @@ def test_unshaded_plates_keep_their_torque_through_the_samples():
 @needs_embree
 def test_rear_plate_in_the_front_plate_shadow():
     """Black square plates of 1 m^2 at x = 1 and x = 0, Sun along +x: the rear one feels
-    nothing; shifted by half its width it feels half, at the centroid of its lit half."""
+    nothing; shifted by half its width it feels half, at the centroid of its lit half
+    (exactly: the shadow's edge runs along the samples' grid lines at k = 4)."""
     front = Facets.plate(1.0, [1, 0, 0], [1.0, 0.0, 0.0])
     for shift, lit in ((0.0, 0.0), (0.5, 0.5), (1.5, 1.0)):
         rear = Facets.plate(1.0, [1, 0, 0], [0.0, shift, 0.0])   # its edges along y, z
         srp = SolarRadiationPressure(Facets.join([front, rear]), **SUN_X,
-                                     self_shadowing=True)
+                                     self_shadowing=True, shadow_subdivision=4)
         force = srp.force(0.0, IDENTITY)
         # front: P along -x; rear: P times its lit area
         assert_agree(force, [-P * (1.0 + lit), 0.0, 0.0], ulps=_sampled_ulps(4),
@@ -157,7 +159,7 @@ def _clipped_area(polygon, half: float) -> float:
 
 
 @needs_embree
-@pytest.mark.parametrize("k", [2, 4, 8, 16, 32])
+@pytest.mark.parametrize("k", [2, 4, 8, 16, 32, None])
 def test_oblique_shadow_against_polygon_clipping(k):
     """The rear plate turned in its plane (edge along (0, 1, 0.5)) under the corner of
     the front plate's shadow: its lit area against the exact one, the square clipped by
@@ -168,6 +170,8 @@ def test_oblique_shadow_against_polygon_clipping(k):
     rear = Facets.plate(1.0, [1, 0, 0], [0.0, *center], edge=[0.0, *edge])
     srp = SolarRadiationPressure(Facets.join([front, rear]), **SUN_X, self_shadowing=True,
                                  shadow_subdivision=k)
+    if k is None:      # by default: edges of 1.41 m, extent 1.77 m, cut into <= 1/24: 16
+        k = AUTO_MAX_SUBDIVISION
     lit = -srp.force(0.0, IDENTITY)[0] / P - 1.0         # black, Sun along +x
     across = np.array([-edge[1], edge[0]])
     square = [center + 0.5 * (a * edge + b * across)
@@ -189,7 +193,9 @@ def test_solar_array_shading_the_bus_reverses_the_torque():
                                       edge=[0, 1, 0])])
     com = [0.0, y_c, 0.0]
     plain = SolarRadiationPressure(shape, **SUN_X, center_of_mass=com)
-    shaded = SolarRadiationPressure(shape, **SUN_X, center_of_mass=com, self_shadowing=True)
+    # k = 4: the shadow's edge, y = 0, runs along grid lines of the bus face: exact
+    shaded = SolarRadiationPressure(shape, **SUN_X, center_of_mass=com, self_shadowing=True,
+                                    shadow_subdivision=4)
     w = np.zeros(3)
     assert_agree(plain(0.0, IDENTITY, w, BODY), [0, 0, P * (0.125 - 1.5 * y_c)],
                  ulps=TORQUE_EVAL, magnitude=_scale(plain))
@@ -206,6 +212,31 @@ def test_solar_array_shading_the_bus_reverses_the_torque():
     assert compile_torques([plain], BODY) is not None
     # and the bound on the torque still holds
     assert np.linalg.norm(batch, axis=1).max() <= shaded.torque_bound(0.0)
+
+
+@needs_embree
+def test_default_subdivision_follows_the_triangle_size():
+    """By default each triangle gets the smallest k that cuts its longest edge into at
+    most 1/24 of the body's extent: a 0.1 m plate 1 m in front of a 2 x 1 m one (extent
+    2 m, pieces of 1/12 m) takes k = 2 on its 0.141 m diagonal, the big one k = 16 (27
+    capped).  Sun on the +x side: only the big plate's front is shaded (by the small
+    one), the answer of k = 16; on the -x side only the small plate's back (by the big
+    one), the answer of k = 2."""
+    small = Facets.plate(0.01, [1, 0, 0], [1.0, 0.0, 0.0])
+    big = Facets.plate(None, [1, 0, 0], [0.0, 0.0, 0.0], size=(2.0, 1.0), edge=[0, 1, 0])
+    pair = Facets.join([small, big])
+    assert np.ceil(np.sqrt(0.02) / (AUTO_SPACING * 2.0)) == 2
+    assert np.ceil(np.sqrt(5.0) / (AUTO_SPACING * 2.0)) > AUTO_MAX_SUBDIVISION
+    auto = SolarRadiationPressure(pair, **SUN_X, self_shadowing=True)
+    assert list(auto.shadeable) == [1, 2]          # the faces turned to the other plate
+    q = _random_attitudes(40, 9)
+    sun_x = rotate(q, [1.0, 0.0, 0.0], inverse=True)[:, 0]
+    for k, side in ((16, sun_x > 0), (2, sun_x < 0)):
+        fixed = SolarRadiationPressure(pair, **SUN_X, self_shadowing=True,
+                                       shadow_subdivision=k)
+        assert side.any()
+        assert_agree(auto.force(0.0, q[side]), fixed.force(0.0, q[side]),
+                     ulps=_sampled_ulps(k), magnitude=P * 4.0)
 
 
 def test_facet_outlines():

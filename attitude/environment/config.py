@@ -138,8 +138,10 @@ TORQUE_TABLES = (
             doc="a facet feels only its part the rest of the body does not shade (ray "
                 "casting with embree, the shadows extra; the outlines of plates and "
                 "facets: size and edge)"),
-        Key("shadow_subdivision", "integer", positive=True, default=4,
-            doc="self_shadowing: each triangle of a facet cut into k^2 parts, one ray each"),
+        Key("shadow_subdivision", "integer", positive=True,
+            doc="self_shadowing: each triangle of a facet cut into k^2 parts, one ray each; "
+                "default k per triangle from its size (parts at most 1/24 of the body, "
+                "k <= 16)"),
     ), excludes=(("facets", ("surface",)),),
         doc="Solar radiation pressure on facets (absorbed, specular, diffuse), zero in the "
             "Earth's umbra (attitude.environment.SolarRadiationPressure; "
@@ -320,7 +322,7 @@ def build_solar_radiation(values: dict, context: BuildContext) -> SolarRadiation
                                   center_of_mass=_center_of_mass(values, context),
                                   pressure=values.get("pressure", SOLAR_PRESSURE_1AU),
                                   self_shadowing=values.get("self_shadowing", False),
-                                  shadow_subdivision=values.get("shadow_subdivision", 4))
+                                  shadow_subdivision=values.get("shadow_subdivision"))
 
 
 def build_drag(values: dict, context: BuildContext) -> AerodynamicDrag:

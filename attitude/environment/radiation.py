@@ -34,22 +34,25 @@ Self-shadowing
 --------------
 With ``self_shadowing=True``, each triangle of a facet's outline
 (:attr:`Facets.triangles <attitude.environment.Facets.triangles>`) is cut into ``k^2``
-equal triangles (``k = shadow_subdivision``, default 4: each edge in ``k``), and one ray
-leaves the centroid of each, a little above the surface (:data:`attitude.raycast.OFFSET_RTOL`
-of the body's extent), toward the Sun; embree (:class:`attitude.raycast.Occluder`)
-tells which rays meet another part of the body.  The lit area ``A_k^lit = sum_j a_j``
-and its first moment ``m_k = sum_j a_j (r_j - r_cm)`` over the unblocked samples replace
-``A_k`` and ``A_k r_k`` in the sums above, so the force of a partly lit facet acts at
-the centroid of its lit part.  This is the midpoint rule on the sub-triangles: it is
-exact when no shadow edge crosses a sub-triangle, and a straight shadow edge crossing a
-triangle cuts at most ``3k - 2`` of its ``k^2`` sub-triangles, so the lit area is in
-error by at most ``(3k - 2) / k^2`` of that triangle (0.625 at ``k = 4``, 0.28 at
-``k = 10``); the errors of the cut sub-triangles have both signs, and the error in the
-tests is a few per cent at ``k = 4`` (docs/environment.md).  Only facets that some
-part of the body rises above (a vertex strictly in front of the facet's plane) can be
-shadowed; the others, all of them on a convex body, cast no rays and keep the sums
-above.  The Sun's direction in the body frame changes at every call, so the rays are
-cast at every call: ``k^2`` rays per lit triangle that can be shadowed.
+equal triangles, each edge in ``k``: ``k = shadow_subdivision``, or by default per
+triangle the smallest ``k`` that makes the sub-triangles' edges at most
+:data:`AUTO_SPACING` (1/24) of the body's extent, up to :data:`AUTO_MAX_SUBDIVISION`
+(16).  One ray leaves the centroid of each sub-triangle toward the Sun, a little above
+the surface (:data:`attitude.raycast.OFFSET_RTOL` of the body's extent); embree
+(:class:`attitude.raycast.Occluder`) tells which rays meet another part of the body.
+The lit area ``A_k^lit = sum_j a_j`` and its first moment ``m_k = sum_j a_j (r_j -
+r_cm)`` over the unblocked samples replace ``A_k`` and ``A_k r_k`` in the sums above,
+so the force of a partly lit facet acts at the centroid of its lit part.  This is the
+midpoint rule on the sub-triangles: it is exact when no shadow edge crosses a
+sub-triangle, and a straight shadow edge crossing a triangle cuts at most ``3k - 2`` of
+its ``k^2`` sub-triangles, so the lit area is in error by at most ``(3k - 2) / k^2`` of
+that triangle (0.625 at ``k = 4``, 0.18 at ``k = 16``); the errors of the cut
+sub-triangles have both signs, and the error in the tests is a few per cent at ``k =
+4``, 0.1 % at ``k = 16`` (docs/environment.md).  Only facets that some part of the body
+rises above (a corner strictly in front of the facet's plane) can be shadowed; the
+others, all of them on a convex body, cast no rays and keep the sums above.  The Sun's
+direction in the body frame changes at every call, so the rays are cast at every call:
+``k^2`` per lit triangle that can be shadowed.
 
 References
 ----------
@@ -70,11 +73,12 @@ from ..orbit import as_path
 from ..quantities import to_si
 from ..quaternion import cross
 from ..raycast import OFFSET_RTOL, Occluder, load_embree
-from .facets import Facets, as_facets
+from .facets import Facets, as_facets, triangle_areas
 from .sun import EARTH_RADIUS, SHADOW_MODELS, SUN_RADIUS, illumination
 from .torquebase import EnvironmentTorque, check_vector
 
-__all__ = ["SolarRadiationPressure", "SOLAR_PRESSURE_1AU", "ASTRONOMICAL_UNIT"]
+__all__ = ["SolarRadiationPressure", "SOLAR_PRESSURE_1AU", "ASTRONOMICAL_UNIT",
+           "AUTO_SPACING", "AUTO_MAX_SUBDIVISION"]
 
 #: Solar radiation pressure at 1 au on an absorbing surface, N/m^2 (1367 W/m^2 / c;
 #: Montenbruck & Gill 2000, Sec. 3.4.1).
@@ -109,9 +113,10 @@ class SolarRadiationPressure(EnvironmentTorque):
         Follow the light the body blocks from its own facets (ray casting with embree,
         the ``shadows`` extra; see the module docstring).  Default False: every facet
         facing the Sun is lit whole.
-    shadow_subdivision : int
+    shadow_subdivision : int, optional
         With ``self_shadowing``: each triangle of a facet cut into ``k^2`` sub-triangles,
-        one ray each (default 4).
+        one ray each; default (None) ``k`` per triangle, from its size (sub-triangles
+        at most :data:`AUTO_SPACING` of the body's extent, ``k <= 16``).
 
     Raises
     ------
@@ -138,7 +143,7 @@ class SolarRadiationPressure(EnvironmentTorque):
 
     def __init__(self, shape, surface=None, sun=None, orbit=None, *, shadow="conical",
                  center_of_mass=(0.0, 0.0, 0.0), pressure=SOLAR_PRESSURE_1AU,
-                 self_shadowing: bool = False, shadow_subdivision: int = 4):
+                 self_shadowing: bool = False, shadow_subdivision: int | None = None):
         if sun is None:
             raise TorqueConfigError("radiation pressure needs the Sun's position: a "
                                     "SunPath, a path or a vector", key="sun")
@@ -165,11 +170,13 @@ class SolarRadiationPressure(EnvironmentTorque):
         self._spec = f.areas * f.specular                           # A rho_s
         self._diff = f.areas * f.diffuse / 3.0                      # A rho_d / 3
         self.self_shadowing = bool(self_shadowing)
-        if not (isinstance(shadow_subdivision, (int, np.integer))
+        if shadow_subdivision is not None and not (
+                isinstance(shadow_subdivision, (int, np.integer))
                 and not isinstance(shadow_subdivision, bool) and shadow_subdivision >= 1):
-            raise TorqueConfigError(f"expected a whole number >= 1, got "
+            raise TorqueConfigError(f"expected a whole number >= 1 or None, got "
                                     f"{shadow_subdivision!r}", key="shadow_subdivision")
-        self.shadow_subdivision = int(shadow_subdivision)
+        self.shadow_subdivision = (None if shadow_subdivision is None
+                                   else int(shadow_subdivision))
         self._shaded = None
         if self.self_shadowing:
             self._shaded = _ShadedFacets(f, self.center_of_mass, self.shadow_subdivision)
@@ -329,8 +336,27 @@ class SolarRadiationPressure(EnvironmentTorque):
                 f"{self.shadow!r}{shading}, sun={self.sun!r}, orbit={self.orbit!r})")
 
 
+#: With ``shadow_subdivision=None``: the longest edge of a sub-triangle is at most this
+#: fraction of the body's extent ...
+AUTO_SPACING = 1.0 / 24.0
+#: ... but no triangle is cut in more than this many pieces per edge (256 rays).
+AUTO_MAX_SUBDIVISION = 16
+
 # Sample points times epochs handled at once by _ShadedFacets.lit (memory ~ 50 B each).
 _RAYS_PER_CHUNK = 1 << 20
+
+
+def _subdivisions(triangles: np.ndarray, extent: float, k: int | None) -> np.ndarray:
+    """``k`` for each triangle: the one given, or the smallest that cuts its longest
+    edge into pieces of at most :data:`AUTO_SPACING` times the body's extent (at most
+    :data:`AUTO_MAX_SUBDIVISION`)."""
+    if k is not None:
+        return np.full(len(triangles), k, dtype=int)
+    edges = triangles - np.roll(triangles, 1, axis=1)
+    longest = np.linalg.norm(edges, axis=-1).max(axis=-1) if len(triangles) else \
+        np.zeros(0)
+    k_auto = np.ceil(longest / (AUTO_SPACING * extent) - 1e-9)
+    return np.clip(k_auto, 1, AUTO_MAX_SUBDIVISION).astype(int)
 
 
 def _sub_centroids(k: int) -> np.ndarray:
@@ -366,15 +392,18 @@ class _ShadedFacets:
         shaded = np.zeros(len(facets), dtype=bool)
         shaded[self.index] = True
         mine = np.flatnonzero(shaded[owner])
-        mine = mine[np.argsort(owner[mine], kind="stable")]       # grouped by facet
-        bary = _sub_centroids(k)                                  # (k^2, 3)
-        points = np.einsum("sb,tbx->tsx", bary, tris[mine])       # (t, k^2, 3)
-        area = np.repeat(0.5 * np.linalg.norm(np.cross(
-            tris[mine, 1] - tris[mine, 0], tris[mine, 2] - tris[mine, 0]), axis=-1)
-            / k**2, k**2)
-        facet_of = np.repeat(owner[mine], k**2)
+        self.subdivision = _subdivisions(tris[mine], extent, k)  # k per triangle
+        points, area, facet_of = [np.zeros((0, 3))], [np.zeros(0)], [np.zeros(0, int)]
+        for kv in np.unique(self.subdivision):
+            these = mine[self.subdivision == kv]
+            bary = _sub_centroids(int(kv))                        # (k^2, 3)
+            points.append(np.einsum("sb,tbx->tsx", bary, tris[these]).reshape(-1, 3))
+            area.append(np.repeat(triangle_areas(tris[these]) / kv**2, kv**2))
+            facet_of.append(np.repeat(owner[these], kv**2))
+        points, area, facet_of = (np.concatenate(x) for x in (points, area, facet_of))
+        order = np.argsort(facet_of, kind="stable")               # grouped by facet
+        points, area, facet_of = points[order], area[order], facet_of[order]
         local = np.searchsorted(self.index, facet_of)             # 0..len(index)-1
-        points = points.reshape(-1, 3)
         self.normals = facets.normals[self.index]
         self.one_minus_s = 1.0 - facets.specular[self.index]
         self.spec = facets.specular[self.index]
