@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import attitude as att
+from attitude.cli import main
 from attitude.environment import Facets, SolarRadiationPressure
 from attitude.environment.facets import rectangle, triangle_areas
 from attitude.environment.radiation import AUTO_MAX_SUBDIVISION, AUTO_SPACING
@@ -329,7 +330,7 @@ def _write(tmp_path, text):
     return path
 
 
-def test_missing_embree_names_the_extra(monkeypatch):
+def test_missing_embree_names_the_extra(monkeypatch, tmp_path, capsys):
     monkeypatch.setitem(sys.modules, "embreex", None)
     box = Facets.box([1.0, 1.0, 1.0])
     with pytest.raises(MissingDependencyError,
@@ -338,3 +339,11 @@ def test_missing_embree_names_the_extra(monkeypatch):
     assert err.value.key == "self_shadowing"
     # the default needs no embree
     assert SolarRadiationPressure(box, **SUN_X).self_shadowing is False
+    # the scenario run exits 2 with one line naming the key and the extra
+    path = tmp_path / "shaded.toml"
+    path.write_text(SCENARIO)
+    assert main(["run", str(path), "--quiet", "-o", str(tmp_path / "o.nc")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert err.startswith(f"attitude: error: {path}: torques[0].self_shadowing: "), err
+    assert "attitude-dynamics[shadows]" in err
