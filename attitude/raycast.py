@@ -81,15 +81,35 @@ class Occluder:
     >>> occluder.occluded([[0.2, 0.2, 1.0], [0.2, 0.2, 1.0], [2.0, 2.0, 1.0]],
     ...                   [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])
     array([ True, False, False])
+
+    It can be pickled (the scene is built again on loading):
+
+    >>> import pickle
+    >>> pickle.loads(pickle.dumps(occluder)).occluded([[0.2, 0.2, 1.0]], [[0, 0, -1.0]])
+    array([ True])
     """
 
     def __init__(self, triangles, *, key: str = "shadows", switch: str = "shadows = false"):
-        rtcore_scene, TriangleMesh = load_embree(key, switch)
         triangles = np.asarray(triangles, dtype=float)
-        self._scene = rtcore_scene.EmbreeScene()
-        TriangleMesh(self._scene, np.ascontiguousarray(triangles, dtype=np.float32))
+        self._setup = (np.ascontiguousarray(triangles, dtype=np.float32), key, switch)
+        self._scene = self._build(*self._setup)
         #: The largest edge of the triangles' bounding box, m.
         self.extent = float(np.ptp(triangles.reshape(-1, 3), axis=0).max())
+
+    @staticmethod
+    def _build(triangles: np.ndarray, key: str, switch: str):
+        rtcore_scene, TriangleMesh = load_embree(key, switch)
+        scene = rtcore_scene.EmbreeScene()
+        TriangleMesh(scene, triangles)
+        return scene
+
+    def __getstate__(self) -> dict:
+        # the embree scene cannot be pickled (dask workers, processes): rebuilt on load
+        return {"setup": self._setup, "extent": self.extent}
+
+    def __setstate__(self, state: dict):
+        self._setup, self.extent = state["setup"], state["extent"]
+        self._scene = self._build(*self._setup)
 
     def occluded(self, origins, directions) -> np.ndarray:
         """``(k,)`` bool: True where the ray from ``origins`` along ``directions`` meets

@@ -6,6 +6,7 @@ bus shaded by its solar array (the torque's sign by hand)."""
 from __future__ import annotations
 
 import importlib.util
+import pickle
 import sys
 
 import numpy as np
@@ -238,6 +239,19 @@ def test_default_subdivision_follows_the_triangle_size():
         assert side.any()
         assert_agree(auto.force(0.0, q[side]), fixed.force(0.0, q[side]),
                      ulps=_sampled_ulps(k), magnitude=P * 4.0)
+
+
+@needs_embree
+def test_a_pickled_model_casts_the_same_rays():
+    """Models travel to dask workers and processes pickled: the embree scene is built
+    again on loading, and the torque is the same."""
+    pair = Facets.join([Facets.plate(1.0, [1, 0, 0], [1.0, 0.0, 0.0]),
+                        Facets.plate(1.0, [1, 0, 0], [0.0, 0.5, 0.0])])
+    srp = SolarRadiationPressure(pair, **SUN_X, self_shadowing=True)
+    copy = pickle.loads(pickle.dumps(srp))
+    q = _random_attitudes(10, 4)
+    np.testing.assert_array_equal(copy(0.0, q, np.zeros(3), BODY),
+                                  srp(0.0, q, np.zeros(3), BODY))
 
 
 def test_facet_outlines():
