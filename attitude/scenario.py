@@ -201,10 +201,11 @@ def load_scenario(path: str | Path) -> Scenario:
         raise r.fail("propagation.rtol", f"expected a tolerance between 0 and 1, got {rtol!r}")
     integrator_step, order = prop.get("integrator_step"), prop.get("order")
     if (integrator_step is not None or order is not None) and (
-            method not in (None, "splitting") or rtol is not None):
+            method not in (None, "splitting") or (rtol is not None and method is None)):
         raise r.fail("propagation.integrator_step" if integrator_step is not None
                      else "propagation.order",
-                     "only used by the splitting integrator (method = \"splitting\", no rtol)")
+                     "only used by the splitting integrator (method = \"splitting\"; with "
+                     "rtol give method = \"splitting\" too)")
 
     body_table = doc.get("body", {})
     torques = _torques(r, doc.get("torques", []), BuildContext(

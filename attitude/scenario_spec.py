@@ -126,7 +126,8 @@ PROPAGATION = Table("propagation", (
     Key("method", "string", choices=METHODS,
         doc="default: exact without torques, splitting with"),
     Key("rtol", "number", positive=True, bounds=(None, 1.0),
-        doc="DOP853 tolerance (selects it with torques)"),
+        doc="DOP853 tolerance (selects it with torques), or with method = \"splitting\" "
+            "the splitting's error control"),
     Key("integrator_step", "quantity", unit="s", positive=True,
         doc="splitting integrator: longest step"),
     Key("order", "integer", choices=(2, 4, 6), doc="splitting integrator order"),

@@ -48,6 +48,7 @@ Built-in models
                               the inertial ``L``, bleeds kinetic energy toward ``L^2 / 2C``
                               in a time constant (:func:`damping_timescale` for asteroids)
 :class:`EddyCurrentDamping`   ``(M (ω x B)) x B`` in a uniform or tilted-dipole field
+:class:`MagneticDipole`       a body-fixed (residual) magnetic moment: ``m x B``
 :class:`HeavyTopPivot`        uniform gravity about a fixed pivot (the heavy top)
 ============================  ========================================================
 
@@ -87,6 +88,7 @@ __all__ = [
     "internal_rate",
     "damping_timescale",
     "EddyCurrentDamping",
+    "MagneticDipole",
     "HeavyTopPivot",
     "UniformField",
     "TiltedDipoleField",
@@ -1414,6 +1416,167 @@ class EddyCurrentDamping(TorqueModel):
         return f"EddyCurrentDamping(magnetic_tensor={m} S m4, field={self.field!r})"
 
 
+# --- residual magnetic dipole -------------------------------------------------------------
+
+
+def _shifted_field(field, dt: float):
+    """``field`` with its time origin moved ``dt`` s later, as a field of its own class
+    (uniform: itself; tilted dipole on a Keplerian orbit: the orbit and the Earth
+    rotation angle advanced), or None when it has no such form."""
+    if isinstance(field, UniformField):
+        return field
+    if isinstance(field, TiltedDipoleField) and isinstance(field.orbit, KeplerOrbit):
+        return TiltedDipoleField(_advance(field.orbit, dt), moment=field.moment,
+                                 tilt=field.tilt, pole_longitude=field.pole_longitude,
+                                 rotation_angle=field.rotation_angle
+                                 + field.rotation_rate * dt,
+                                 rotation_rate=field.rotation_rate)
+    return None
+
+
+class MagneticDipole(TorqueModel):
+    """Torque of a residual magnetic dipole fixed in the body: ``M = m x B``.
+
+    .. math::
+
+        M = m \\times B_b, \\qquad V = -\\,m \\cdot B_b
+
+    with ``m`` the body's magnetic moment (A m^2, body frame: the net moment of its
+    current loops and magnetised parts, magnetorquers off) and ``B_b`` the field at the
+    body in body axes (the inertial field rotated by the attitude,
+    ``B_b = q^{-1} B q``).  The torque depends on the attitude and the time only
+    (``velocity_dependent = False``: an exact kick in the splitting integrator) and
+    turns ``m`` toward ``B`` like a compass needle: in a uniform field it derives from
+    the potential ``V`` (:meth:`potential`), and a small swing of ``m`` about ``B``
+    about a principal axis of moment ``I`` normal to both oscillates at
+    ``sqrt(|m| |B| / I)``.  Satellites carry residual dipoles of order 0.1-1 A m^2
+    (an assumption unless measured: Inamori et al. 2011 estimate one in flight), which
+    in a LEO field of 2e-5-5.5e-5 T gives torques up to ``|m| |B|`` ~ 2e-6-5e-5 N m.
+
+    Parameters
+    ----------
+    moment : (3,) array-like, Quantity or ``{value, unit}``
+        Magnetic moment, A m^2, body frame.
+    field : callable ``t -> (..., 3)`` T, or (3,) array
+        Inertial magnetic field at the body: :class:`UniformField`,
+        :class:`TiltedDipoleField` along an orbit, :class:`attitude.environment.IGRF`,
+        any function, or a constant vector.
+
+    References
+    ----------
+    .. [1] Wertz, J. R. (ed.) (1978). *Spacecraft Attitude Determination and Control*.
+       Reidel (environmental torques: the magnetic disturbance torque).
+    .. [2] Inamori, T., Sako, N. & Nakasuka, S. (2011). Magnetic dipole moment
+       estimation and compensation for an accurate attitude control in nano-satellite
+       missions. *Acta Astronautica* 68, 2038-2046.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude import RigidBody
+    >>> from attitude.torques import MagneticDipole, UniformField
+    >>> body = RigidBody.from_principal_moments([0.02, 0.03, 0.04])
+    >>> needle = MagneticDipole({"value": [0.5, 0.0, 0.0], "unit": "A m2"},
+    ...                         UniformField([0.0, 3e-5, 0.0]))
+    >>> needle(0.0, [0, 0, 0, 1], [0.0, 0.0, 0.0], body)      # m x B, about +z
+    array([0.0e+00, 0.0e+00, 1.5e-05])
+    >>> float(needle.potential(0.0, [0, 0, 0, 1], body))      # m normal to B
+    0.0
+    """
+
+    velocity_dependent = False
+
+    def __init__(self, moment, field):
+        self.moment = _quantity(moment, "A m2", "moment", shape=(3,))
+        if field is None:
+            raise TorqueConfigError("a magnetic dipole needs the field: give a "
+                                    "UniformField, a TiltedDipoleField, an IGRF, a "
+                                    "callable t -> B (T) or a vector", key="field")
+        self.field = field if callable(field) else UniformField(field)
+
+    def evaluate(self, t, quaternion, omega_body, body):
+        B = quat.rotate(quaternion, np.asarray(self.field(t), dtype=float), inverse=True)
+        return quat.cross(self.moment, B)
+
+    def potential(self, t, quaternion, body=None) -> np.ndarray:
+        """Magnetic potential energy ``V = -m . B_b``, J: lowest with ``m`` along ``B``.
+        ``E_kin + V`` is conserved when the field is fixed in inertial space.
+
+        Examples
+        --------
+        >>> from attitude.torques import MagneticDipole
+        >>> float(MagneticDipole([1.0, 0.0, 0.0], [2e-5, 0.0, 0.0]).potential(
+        ...     0.0, [0, 0, 0, 1]))
+        -2e-05
+        """
+        t = np.asarray(t, dtype=float)
+        q = _unit_quaternion(quaternion)
+        B = quat.rotate(q, np.asarray(self.field(t), dtype=float), inverse=True)
+        return -_dot(np.broadcast_to(self.moment, B.shape), B)
+
+    def characteristic_rate(self, t, quaternion, omega_body, body):
+        """``sqrt(|m| |B(t)| / A)``, rad/s: the compass libration rate (``A`` the least
+        moment), or the orbital rate of a field along an orbit if faster (the rate at
+        which the field turns).
+
+        Examples
+        --------
+        >>> from attitude import RigidBody
+        >>> from attitude.torques import MagneticDipole
+        >>> body = RigidBody.from_principal_moments([1.0, 1.5, 2.0])
+        >>> float(MagneticDipole([0.0, 0.0, 2.0], [0.0, 0.0, 4e-5]).characteristic_rate(
+        ...     0.0, [0, 0, 0, 1], [0.0, 0.0, 0.0], body))           # sqrt(2 * 4e-5 / 1.0)
+        0.008944271909999159
+        """
+        field = np.asarray(self.field(np.asarray(t, dtype=float)), dtype=float)
+        strength = float(np.linalg.norm(self.moment)) * np.sqrt(_dot(field, field))
+        rate = np.sqrt(strength / _moments_of(body)[..., 0])
+        orbit = getattr(self.field, "orbit", None)
+        if orbit is not None:
+            rate = np.maximum(rate, _orbit_rate(orbit))
+        return float(rate) if np.ndim(rate) == 0 else rate
+
+    def shifted(self, dt: float) -> TorqueModel:
+        """Itself in a uniform field; in a tilted dipole on a Keplerian orbit, the same
+        model with the orbit and the Earth rotation angle advanced by ``dt``; else (IGRF,
+        a function) the default wrapper.
+
+        Examples
+        --------
+        >>> from attitude.torques import MagneticDipole, UniformField
+        >>> m = MagneticDipole([1.0, 0.0, 0.0], UniformField([0.0, 0.0, 3e-5]))
+        >>> m.shifted(60.0) is m
+        True
+        """
+        dt = float(dt)
+        if dt == 0.0:
+            return self
+        field = _shifted_field(self.field, dt)
+        if field is self.field:
+            return self
+        if field is not None:
+            return MagneticDipole(self.moment, field)
+        return super().shifted(dt)
+
+    def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
+        """``[("magnetic_dipole", {moment, field})]``, or None when the field has no
+        compiled form (a user's function) (:meth:`TorqueModel.compiled_parameters`).
+
+        Examples
+        --------
+        >>> from attitude.torques import MagneticDipole, UniformField
+        >>> model = MagneticDipole([0.3, 0.0, 0.0], UniformField([0, 0, 3e-5]))
+        >>> [(kind, sorted(v)) for kind, v in model.compiled_parameters(None)]
+        [('magnetic_dipole', ['field', 'moment'])]
+        """
+        if not callable(getattr(self.field, "compiled_parameters", None)):
+            return None
+        return [("magnetic_dipole", {"moment": self.moment.copy(), "field": self.field})]
+
+    def __repr__(self) -> str:
+        return f"MagneticDipole(moment={self.moment.tolist()} A m2, field={self.field!r})"
+
+
 # --- heavy top -------------------------------------------------------------------------
 
 
@@ -1641,6 +1804,12 @@ TORQUE_TABLES: dict[str, Table] = {t.name: t for t in (
         Key("up", "quantity", unit="", shape=(3,), doc="inertial unit vector, up"),
     ), doc="Uniform gravity about a fixed pivot."),
 )}
+# a residual magnetic dipole: the field keys are eddy_current's (one field reader)
+TORQUE_TABLES["magnetic_dipole"] = Table("magnetic_dipole", (
+    Key("moment", "quantity", unit="A m2", shape=(3,), required=True,
+        doc="magnetic moment, body frame"),
+    *(TORQUE_TABLES["eddy_current"][name] for name in ("field", "mu", "orbit")),
+), doc="A body-fixed (residual) magnetic dipole in a magnetic field: `m x B`.")
 
 def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
     """A validated :data:`ORBIT_TABLE` (SI values; ``epoch`` an astropy Time) -> orbit."""
@@ -1754,6 +1923,10 @@ def _eddy_current(table, base_epoch):
                      spec["conductivity"], field)
 
 
+def _magnetic_dipole(table, base_epoch):
+    return MagneticDipole(table["moment"], _field_from_table(table, base_epoch))
+
+
 def _heavy_top(table, base_epoch):
     kwargs = {k: table[k] for k in ("mass", "g", "up") if k in table}
     return HeavyTopPivot(pivot_to_com=table["pivot_to_com"], **kwargs)
@@ -1767,6 +1940,7 @@ TORQUE_TYPES: dict[str, Callable] = {
     "dissipation": _dissipation,
     "eddy_current": _eddy_current,
     "heavy_top": _heavy_top,
+    "magnetic_dipole": _magnetic_dipole,
 }
 
 
@@ -1877,6 +2051,8 @@ def from_config(table: Mapping, *, base_epoch=None,
                         rotation angle from ``base_epoch``) with ``orbit`` and ``mu``
                         (default the Earth's), or ``field = { model = "uniform",
                         vector = {value, unit} }``
+    magnetic_dipole     ``moment`` (A m2, 3-vector, body frame); ``field``, ``orbit``,
+                        ``mu`` as ``eddy_current`` (``field = "igrf"`` for IGRF-14)
     heavy_top           ``pivot_to_com`` (m, body frame); ``mass`` (kg, default the
                         body's); ``g`` (m/s2); ``up`` (inertial unit vector)
     solar_radiation,    ``orbit``; ``facets`` (boxes, plates, facets) or the ``[body]``

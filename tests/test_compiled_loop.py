@@ -212,3 +212,38 @@ def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
         stamp.write_text("changed")
         compiled._drop_stale_cache()
         assert not stale.exists() and stamp.read_text() == digest
+
+
+def test_rtol_with_the_splitting_method_in_a_scenario(tmp_path):
+    """[propagation] method = "splitting" with rtol: the run is the splitting's error-
+    controlled one (the same numbers as att.propagate with those keywords)."""
+    from attitude.scenario import load_scenario, run_scenario
+
+    path = tmp_path / "gg.toml"
+    path.write_text(textwrap.dedent("""
+        [scenario]
+        name = "gravity gradient, error-controlled splitting"
+        [body]
+        principal_moments = [70.0, 95.0, 120.0]
+        [state]
+        epoch = "2030-01-01T00:00:00"
+        attitude = { quaternion_scalar_last = [0, 0, 0, 1] }
+        omega_body = { value = [5e-4, -1e-3, 1.1e-3], unit = "rad/s" }
+        [propagation]
+        duration = "1 h"
+        step = "5 min"
+        method = "splitting"
+        rtol = 1e-9
+        [[torques]]
+        type = "gravity_gradient"
+        mu = "3.986004418e14 m3/s2"
+        orbit = { a = "7000 km", e = 0.01, i = "51.6 deg" }
+    """))
+    scenario = load_scenario(path)
+    result = run_scenario(scenario, write_outputs=False)
+    eph = result.ephemeris
+    assert "method=splitting" in eph.dataset.attrs["source"]
+    again = att.propagate(scenario.body, scenario.state, eph.dataset.time.values,
+                          torques=list(scenario.torques), method="splitting", rtol=1e-9)
+    np.testing.assert_array_equal(eph.dataset.quaternion.values,
+                                  again.dataset.quaternion.values)

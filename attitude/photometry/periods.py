@@ -454,7 +454,16 @@ def _covariance(t, w, freqs, coef, terms, offsets, chi2, n, *, scale: bool):
     jac_f = (2 * np.pi * t[:, None]) * (dphase @ terms)              # (n, n_periods)
     J = np.hstack([jac_f, A]) * w[:, None]
     dof = max(n - J.shape[1], 1)
-    cov = np.linalg.pinv(J.T @ J)
+    # (J^T J)^-1 from the SVD of J with unit columns (the frequency columns are ~2 pi t
+    # larger than the coefficients'): V S^-2 V^T is positive semi-definite by
+    # construction, where a pseudo-inverse of J^T J squares the condition number and,
+    # ill-conditioned, gave negative variances; directions below J's numerical rank
+    # (numpy's matrix_rank rule) are left out
+    norms = np.sqrt(np.sum(J * J, axis=0))
+    norms = np.where(norms > 0, norms, 1.0)
+    _, sv, vt = np.linalg.svd(J / norms, full_matrices=False)
+    keep = sv > sv[0] * max(J.shape) * np.finfo(float).eps
+    cov = ((vt[keep].T / sv[keep] ** 2) @ vt[keep]) / np.outer(norms, norms)
     if scale:
         cov *= chi2 / dof
     else:

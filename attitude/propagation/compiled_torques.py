@@ -18,6 +18,7 @@ term                        numbers from ``offsets[k] + 1``
 ``constant_inertial``       torque (3)
 ``heavy_top``               ``m g``, up (3), pivot -> centre of mass (3)
 ``eddy_current``            isotropic (0 or 1), scalar, tensor (9), field
+``magnetic_dipole``         moment (3), field
 ``dissipation``             ``k``, inertia (9)
 ``radiation_pressure``      time offset, pressure at 1 au, au, shadow (0 none, 1 conical,
                             2 cylindrical), Earth and Sun radii, facets ``n``, Sun's path,
@@ -74,9 +75,9 @@ __all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_K
 #: Codes of the terms in ``kinds``.
 TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
               "heavy_top": 3, "eddy_current": 4, "dissipation": 5,
-              "radiation_pressure": 6, "drag": 7}
+              "radiation_pressure": 6, "drag": 7, "magnetic_dipole": 8}
 (_GRAVITY_GRADIENT, _CONSTANT_BODY, _CONSTANT_INERTIAL, _HEAVY_TOP, _EDDY, _DISSIPATION,
- _RADIATION, _DRAG) = range(8)
+ _RADIATION, _DRAG, _MAGNETIC_DIPOLE) = range(9)
 #: Codes of the shadow models of radiation pressure.
 _SHADOWS = {None: 0.0, "conical": 1.0, "cylindrical": 2.0}
 #: Codes of the paths (first number of a path block).
@@ -439,6 +440,11 @@ def body_torque(kinds, offsets, params, t0, q_b, w_b, out):
             else:
                 y0, y1, y2 = _matvec(params, i + 2, x0, x1, x2)
             m0, m1, m2 = y1 * bz - y2 * by, y2 * bx - y0 * bz, y0 * by - y1 * bx
+        elif kind == _MAGNETIC_DIPOLE:          # m x B_b
+            fx, fy, fz = _field(params, int(params[i + 3]), t)
+            bx, by, bz = _to_body(qx, qy, qz, qw, fx, fy, fz)
+            mx, my, mz = params[i], params[i + 1], params[i + 2]
+            m0, m1, m2 = my * bz - mz * by, mz * bx - mx * bz, mx * by - my * bx
         elif kind == _RADIATION:
             m0, m1, m2 = _radiation(params, i, t, qx, qy, qz, qw)
         elif kind == _DRAG:
@@ -600,6 +606,11 @@ class _Layout:
                 return None
             return (1.0 if v["isotropic"] else 0.0, float(v["scalar"]),
                     _vector(v, "tensor", 9), float(field))
+        if kind == "magnetic_dipole":
+            field = self.source(v["field"], _FIELDS)
+            if field is None:
+                return None
+            return _vector(v, "moment", 3), float(field)
         if kind == "dissipation":
             return float(v["k"]), _vector(v, "inertia", 9)
         if kind == "radiation_pressure":
