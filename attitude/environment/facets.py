@@ -54,6 +54,17 @@ def triangle_areas(triangles) -> np.ndarray:
     return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=-1)
 
 
+def _squares(areas: np.ndarray, normals: np.ndarray, centers: np.ndarray) -> np.ndarray:
+    """:func:`rectangle` of each facet by its area alone, vectorised: ``(2 n, 3, 3)``."""
+    e = np.eye(3)[np.argmin(np.abs(normals), axis=1)]                 # (n, 3)
+    u = e - np.sum(e * normals, axis=1, keepdims=True) * normals
+    u *= (0.5 * np.sqrt(areas) / np.linalg.norm(u, axis=1))[:, None]
+    v = np.cross(normals, u)
+    p0, p1, p2, p3 = centers - u - v, centers + u - v, centers + u + v, centers - u + v
+    return np.stack([np.stack([p0, p1, p2], axis=1), np.stack([p0, p2, p3], axis=1)],
+                    axis=1).reshape(-1, 3, 3)
+
+
 def rectangle(area, normal, center, size=None, edge=None) -> np.ndarray:
     """Two triangles ``(2, 3, 3)`` outlining a rectangle in the plane through ``center``
     normal to ``normal``: a square of ``area``, or ``size = (a, b)`` with ``a`` along
@@ -198,9 +209,7 @@ class Facets:
             if self.triangle_facets is not None:
                 raise TorqueConfigError("give triangles with triangle_facets",
                                         key="triangles")
-            tris = np.concatenate([rectangle(a, n_k, c_k) for a, n_k, c_k in zip(
-                areas, self.normals, self.centroids, strict=True)])
-            return tris, np.repeat(np.arange(n), 2)
+            return _squares(areas, self.normals, self.centroids), np.repeat(np.arange(n), 2)
         tris = np.asarray(self.triangles, dtype=float)
         if tris.ndim != 3 or tris.shape[1:] != (3, 3) or not np.all(np.isfinite(tris)):
             raise TorqueConfigError(f"expected finite corners of shape (m, 3, 3), got shape "
