@@ -65,6 +65,15 @@ _CENTER = Key("center", "quantity", unit="m", shape=(3,), default="[0, 0, 0]",
               doc="centre, body frame")
 _NORMAL = Key("normal", "quantity", unit="", shape=(3,), required=True,
               doc="outward normal, body frame (normalised)")
+# The outline of a plate or facet: read by self-shadowing only.
+_OUTLINE = (
+    Key("size", "quantity", unit="m", shape=(2,), positive=True,
+        doc="a rectangle's edges [a, b], instead of `area` (its outline for "
+            "self_shadowing; by area alone it is a square)"),
+    Key("edge", "quantity", unit="", shape=(3,),
+        doc="direction of the rectangle's edge a, body frame (projected into the plane); "
+            "default the body axis least aligned with the normal"),
+)
 
 #: The entries of ``facets = [...]``, chosen by ``type``.
 FACET_TABLES = (
@@ -74,16 +83,16 @@ FACET_TABLES = (
         _CENTER, *_OPTICS,
     ), excludes=_OPTICS_RULE, doc="a rectangular box: six facets"),
     Table("plate", (
-        Key("area", "quantity", unit="m2", required=True, positive=True,
-            doc="area of one face"),
-        _NORMAL, _CENTER, *_OPTICS,
+        Key("area", "quantity", unit="m2", positive=True, doc="area of one face"),
+        *_OUTLINE, _NORMAL, _CENTER, *_OPTICS,
         Key("back_material", "string", doc="material of the rear face; default as the front"),
-    ), excludes=_OPTICS_RULE,
+    ), excludes=_OPTICS_RULE, exactly_one=(("area", "size"),),
         doc="a thin plate (a solar array): two facets back to back, normals +n and -n"),
     Table("facet", (
-        Key("area", "quantity", unit="m2", required=True, positive=True),
-        _NORMAL, _CENTER, *_OPTICS,
-    ), excludes=_OPTICS_RULE, doc="one flat facet, lit or hit on its outward side only"),
+        Key("area", "quantity", unit="m2", positive=True),
+        *_OUTLINE, _NORMAL, _CENTER, *_OPTICS,
+    ), excludes=_OPTICS_RULE, exactly_one=(("area", "size"),),
+        doc="one flat facet, lit or hit on its outward side only"),
 )
 
 #: A named material: ``materials = { name = { specular, diffuse } }``.
@@ -125,6 +134,14 @@ TORQUE_TABLES = (
             default="conical", doc="Earth shadow model (penumbra with conical)"),
         Key("pressure", "quantity", unit="N/m2", nonnegative=True, default=SOLAR_PRESSURE_1AU,
             doc="radiation pressure at 1 au"),
+        Key("self_shadowing", "boolean", default=False,
+            doc="a facet feels only its part the rest of the body does not shade (ray "
+                "casting with embree, the shadows extra; the outlines of plates and "
+                "facets: size and edge)"),
+        Key("shadow_subdivision", "integer", positive=True,
+            doc="self_shadowing: each triangle of a facet cut into k^2 parts, one ray each; "
+                "default k per triangle from its size (parts at most 1/24 of the body, "
+                "k <= 16)"),
     ), excludes=(("facets", ("surface",)),),
         doc="Solar radiation pressure on facets (absorbed, specular, diffuse), zero in the "
             "Earth's umbra (attitude.environment.SolarRadiationPressure; "
@@ -194,21 +211,19 @@ def _one_facet(entry: dict, materials: dict, default: OpticalProperties, key: st
     if not np.linalg.norm(normal) > 0:
         raise TorqueConfigError("the normal is zero; give the outward direction of the "
                                 "facet", key=f"{key}.normal")
-    if kind == "facet":
-        return Facets([entry["area"]], [normal], [center], optics.specular, optics.diffuse)
     back = optics
     if "back_material" in entry:
         back = _material(entry["back_material"], materials, f"{key}.back_material")
-    return Facets.plate(entry["area"], normal, center, specular=optics.specular,
-                        diffuse=optics.diffuse, back=(back.specular, back.diffuse))
-
-
-def _joined(parts: list) -> Facets:
-    return Facets(np.concatenate([f.areas for f in parts]),
-                  np.concatenate([f.normals for f in parts]),
-                  np.concatenate([f.centroids for f in parts]),
-                  np.concatenate([f.specular for f in parts]),
-                  np.concatenate([f.diffuse for f in parts]))
+    try:
+        plate = Facets.plate(entry.get("area"), normal, center, specular=optics.specular,
+                             diffuse=optics.diffuse, back=(back.specular, back.diffuse),
+                             size=entry.get("size"), edge=entry.get("edge"))
+    except TorqueConfigError as err:
+        raise TorqueConfigError(err.reason, key=f"{key}.{err.key}") from None
+    if kind == "facet":                    # the front face of a plate
+        return Facets(plate.areas[:1], plate.normals[:1], plate.centroids[:1],
+                      plate.specular[:1], plate.diffuse[:1], plate.triangles[:2], [0, 0])
+    return plate
 
 
 def _shape_facets(values: dict, context: BuildContext, materials: dict,
@@ -260,7 +275,7 @@ def build_facets(values: dict, context: BuildContext) -> Facets:
         return _shape_facets(values, context, materials, default)
     if not values["facets"]:
         raise TorqueConfigError("expected at least one box, plate or facet", key="facets")
-    return _joined([_one_facet(entry, materials, default, f"facets[{i}]")
+    return Facets.join([_one_facet(entry, materials, default, f"facets[{i}]")
                     for i, entry in enumerate(values["facets"])])
 
 
@@ -305,7 +320,9 @@ def build_solar_radiation(values: dict, context: BuildContext) -> SolarRadiation
     return SolarRadiationPressure(facets, sun=sun, orbit=orbit,
                                   shadow=None if shadow == "none" else shadow,
                                   center_of_mass=_center_of_mass(values, context),
-                                  pressure=values.get("pressure", SOLAR_PRESSURE_1AU))
+                                  pressure=values.get("pressure", SOLAR_PRESSURE_1AU),
+                                  self_shadowing=values.get("self_shadowing", False),
+                                  shadow_subdivision=values.get("shadow_subdivision"))
 
 
 def build_drag(values: dict, context: BuildContext) -> AerodynamicDrag:

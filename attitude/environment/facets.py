@@ -7,6 +7,14 @@ description photometry uses -- a :class:`~attitude.surface.Surface` or a
 :class:`~attitude.shape.Polyhedron` with one material -- or directly, for open
 surfaces a closed mesh cannot describe (a thin plate, a solar array: two facets back
 to back).  The torque models of the wing precompute their sums over facets from it.
+
+Each facet also has an outline, as triangles (:attr:`Facets.triangles`), which only
+self-shadowing reads (:class:`~attitude.environment.SolarRadiationPressure` with
+``self_shadowing=True``): a mesh's faces are their own triangles, a box's faces are its
+rectangles, and a facet or plate given by its area alone is a square of that area
+centred on its centroid, edges along ``edge`` projected into its plane (default the
+body axis least aligned with its normal) and ``n x edge``; ``size = (a, b)`` makes it an
+``a`` by ``b`` rectangle, ``a`` along ``edge``.
 """
 
 from __future__ import annotations
@@ -19,13 +27,87 @@ from ..errors import TorqueConfigError
 from ..shape import Polyhedron
 from ..surface import OpticalProperties, Surface
 
-__all__ = ["Facets", "as_facets"]
+__all__ = ["Facets", "as_facets", "rectangle", "triangle_areas"]
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a
+
+
+def _frozen_int(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=np.int64)
+    a.setflags(write=False)
+    return a
+
+
+def triangle_areas(triangles) -> np.ndarray:
+    """Areas of triangles ``(m, 3, 3)``, shape ``(m,)``.
+
+    Examples
+    --------
+    >>> triangle_areas([[[0, 0, 0], [2, 0, 0], [0, 1, 0]]])
+    array([1.])
+    """
+    t = np.asarray(triangles, dtype=float)
+    return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=-1)
+
+
+def _squares(areas: np.ndarray, normals: np.ndarray, centers: np.ndarray) -> np.ndarray:
+    """:func:`rectangle` of each facet by its area alone, vectorised: ``(2 n, 3, 3)``."""
+    e = np.eye(3)[np.argmin(np.abs(normals), axis=1)]                 # (n, 3)
+    u = e - np.sum(e * normals, axis=1, keepdims=True) * normals
+    u *= (0.5 * np.sqrt(areas) / np.linalg.norm(u, axis=1))[:, None]
+    v = np.cross(normals, u)
+    p0, p1, p2, p3 = centers - u - v, centers + u - v, centers + u + v, centers - u + v
+    return np.stack([np.stack([p0, p1, p2], axis=1), np.stack([p0, p2, p3], axis=1)],
+                    axis=1).reshape(-1, 3, 3)
+
+
+def rectangle(area, normal, center, size=None, edge=None) -> np.ndarray:
+    """Two triangles ``(2, 3, 3)`` outlining a rectangle in the plane through ``center``
+    normal to ``normal``: a square of ``area``, or ``size = (a, b)`` with ``a`` along
+    ``edge`` projected into the plane (default the body axis least aligned with the
+    normal).
+
+    Raises
+    ------
+    TorqueConfigError
+        When ``edge`` is parallel to the normal, or ``size`` does not give ``area``.
+
+    Examples
+    --------
+    >>> tris = rectangle(4.0, [0, 0, 1], [0, 0, 0])
+    >>> tris[0]
+    array([[-1., -1.,  0.],
+           [ 1., -1.,  0.],
+           [ 1.,  1.,  0.]])
+    >>> float(triangle_areas(tris).sum())
+    4.0
+    """
+    n = np.asarray(normal, dtype=float)
+    n = n / np.linalg.norm(n)
+    c = np.asarray(center, dtype=float)
+    if size is None:
+        a = b = float(np.sqrt(area))
+    else:
+        a, b = (float(x) for x in size)
+        if not (a > 0 and b > 0):
+            raise TorqueConfigError(f"expected two positive edges, got {size!r}", key="size")
+        if area is not None and not abs(a * b - area) <= 1e-9 * area:
+            raise TorqueConfigError(f"size {a} x {b} m does not give the area {area} m^2",
+                                    key="size")
+    e = np.eye(3)[int(np.argmin(np.abs(n)))] if edge is None else np.asarray(edge, float)
+    u = e - (e @ n) * n
+    length = np.linalg.norm(u)
+    if not length > 1e-12 * max(np.linalg.norm(e), 1e-300):
+        raise TorqueConfigError("the edge is parallel to the normal; give a direction in "
+                                "the facet's plane", key="edge")
+    u = 0.5 * a * u / length
+    v = 0.5 * b * np.cross(n, u / np.linalg.norm(u))
+    p = [c - u - v, c + u - v, c + u + v, c - u + v]
+    return np.array([[p[0], p[1], p[2]], [p[0], p[2], p[3]]])
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,12 +124,19 @@ class Facets:
         Facet centroids, m, body frame.
     specular, diffuse : float or array_like, shape (n,)
         ``rho_s`` and ``rho_d`` per facet, in [0, 1], ``rho_s + rho_d <= 1``.
+    triangles : array_like, shape (m, 3, 3), optional
+        The outlines of the facets as triangles, m (corners in any order); default a
+        square of each facet's area centred on its centroid (:func:`rectangle`).
+    triangle_facets : array_like of int, shape (m,), optional
+        The facet each triangle belongs to (with ``triangles``); every facet needs at
+        least one, and their areas must add up to the facet's area (to 1e-6).
 
     Raises
     ------
     TorqueConfigError
         Naming the key: a facet with zero, negative or non-finite area, a zero normal,
-        a fraction outside [0, 1], arrays of inconsistent shapes.
+        a fraction outside [0, 1], arrays of inconsistent shapes, triangles that do
+        not cover the facets' areas.
 
     Examples
     --------
@@ -64,6 +153,8 @@ class Facets:
     centroids: np.ndarray
     specular: np.ndarray = 0.0
     diffuse: np.ndarray = 0.0
+    triangles: np.ndarray | None = None
+    triangle_facets: np.ndarray | None = None
 
     def __post_init__(self):
         areas = np.atleast_1d(np.asarray(self.areas, dtype=float))
@@ -108,6 +199,36 @@ class Facets:
         object.__setattr__(self, "centroids", _frozen(vectors["centroids"]))
         object.__setattr__(self, "specular", _frozen(fractions["specular"]))
         object.__setattr__(self, "diffuse", _frozen(fractions["diffuse"]))
+        triangles, owner = self._outlines(areas)
+        object.__setattr__(self, "triangles", _frozen(triangles))
+        object.__setattr__(self, "triangle_facets", _frozen_int(owner))
+
+    def _outlines(self, areas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n = areas.shape[0]
+        if self.triangles is None:
+            if self.triangle_facets is not None:
+                raise TorqueConfigError("give triangles with triangle_facets",
+                                        key="triangles")
+            return _squares(areas, self.normals, self.centroids), np.repeat(np.arange(n), 2)
+        tris = np.asarray(self.triangles, dtype=float)
+        if tris.ndim != 3 or tris.shape[1:] != (3, 3) or not np.all(np.isfinite(tris)):
+            raise TorqueConfigError(f"expected finite corners of shape (m, 3, 3), got shape "
+                                    f"{tris.shape}", key="triangles")
+        if self.triangle_facets is None:
+            raise TorqueConfigError("give the facet of each triangle, triangle_facets",
+                                    key="triangle_facets")
+        owner = np.asarray(self.triangle_facets)
+        if (owner.shape != tris.shape[:1] or not np.issubdtype(owner.dtype, np.integer)
+                or (owner.size and (owner.min() < 0 or owner.max() >= n))):
+            raise TorqueConfigError(f"expected {tris.shape[0]} facet indices in [0, {n})",
+                                    key="triangle_facets")
+        covered = np.bincount(owner, weights=triangle_areas(tris), minlength=n)
+        bad = np.flatnonzero(~(np.abs(covered - areas) <= 1e-6 * areas))
+        if bad.size:
+            raise TorqueConfigError(f"facet {bad[0]}: its triangles cover "
+                                    f"{covered[bad[0]]!r} m^2, its area is "
+                                    f"{areas[bad[0]]!r} m^2", key="triangles")
+        return tris, owner
 
     def __len__(self) -> int:
         return len(self.areas)
@@ -127,7 +248,8 @@ class Facets:
         """
         shape = surface.shape
         return cls(shape.face_areas, shape.face_normals, shape.face_centroids,
-                   surface.specular, surface.diffuse)
+                   surface.specular, surface.diffuse, shape.vertices[shape.faces],
+                   np.arange(len(shape.faces)))
 
     @classmethod
     def from_shape(cls, shape: Polyhedron, properties: OpticalProperties | None = None
@@ -144,22 +266,34 @@ class Facets:
         return cls.from_surface(Surface.uniform(shape, properties))
 
     @classmethod
-    def plate(cls, area: float, normal, centroid=(0.0, 0.0, 0.0), *, specular=0.0,
-              diffuse=0.0, back=None) -> Facets:
+    def plate(cls, area: float | None, normal, centroid=(0.0, 0.0, 0.0), *, specular=0.0,
+              diffuse=0.0, back=None, size=None, edge=None) -> Facets:
         """A thin plate: two facets of ``area`` back to back (normals ``+n`` and ``-n``).
 
         ``back`` is an optional ``(specular, diffuse)`` pair for the rear face (default:
-        as the front).
+        as the front).  The outline (for self-shadowing only) is a square of ``area``,
+        or ``size = (a, b)`` m with ``a`` along ``edge`` (:func:`rectangle`; ``area`` may
+        then be None).
 
         Examples
         --------
         >>> len(Facets.plate(1.0, [0, 0, 1]))
         2
+        >>> Facets.plate(None, [0, 0, 1], size=(8.0, 2.0), edge=[0, 1, 0]).areas
+        array([16., 16.])
         """
         n = np.asarray(normal, dtype=float)
         c = np.asarray(centroid, dtype=float)
+        if not np.linalg.norm(n) > 0:
+            raise TorqueConfigError("the normal is zero", key="normal")
         rs, rd = (specular, diffuse) if back is None else back
-        return cls([area, area], [n, -n], [c, c], [specular, rs], [diffuse, rd])
+        tris = rectangle(area, n, c, size, edge)
+        if area is None:
+            if size is None:
+                raise TorqueConfigError("give the area or the size of the plate", key="area")
+            area = float(size[0]) * float(size[1])
+        return cls([area, area], [n, -n], [c, c], [specular, rs], [diffuse, rd],
+                   np.concatenate([tris, tris[:, ::-1]]), [0, 0, 1, 1])
 
     @classmethod
     def box(cls, size, center=(0.0, 0.0, 0.0), *, specular=0.0, diffuse=0.0) -> Facets:
@@ -176,7 +310,7 @@ class Facets:
             raise TorqueConfigError(f"expected three positive edge lengths, got {size!r}",
                                     key="size")
         center = np.asarray(center, dtype=float)
-        areas, normals, centroids = [], [], []
+        areas, normals, centroids, tris = [], [], [], []
         for i in range(3):
             j, k = (i + 1) % 3, (i + 2) % 3
             for sign in (1.0, -1.0):
@@ -185,7 +319,33 @@ class Facets:
                 areas.append(size[j] * size[k])
                 normals.append(e)
                 centroids.append(center + 0.5 * size[i] * e)
-        return cls(areas, normals, centroids, specular, diffuse)
+                tris.append(rectangle(areas[-1], e, centroids[-1], (size[j], size[k]),
+                                      np.eye(3)[j]))
+        return cls(areas, normals, centroids, specular, diffuse, np.concatenate(tris),
+                   np.repeat(np.arange(6), 2))
+
+    @classmethod
+    def join(cls, parts) -> Facets:
+        """One :class:`Facets` of several, in order (outlines kept).
+
+        Examples
+        --------
+        >>> both = Facets.join([Facets.box([1.0, 1.0, 1.0]), Facets.plate(2.0, [0, 0, 1])])
+        >>> len(both), both.triangle_facets[-1]
+        (8, np.int64(7))
+        """
+        parts = list(parts)
+        if not parts:
+            raise TorqueConfigError("expected at least one set of facets", key="facets")
+        starts = np.cumsum([0] + [len(f) for f in parts[:-1]])
+        return cls(np.concatenate([f.areas for f in parts]),
+                   np.concatenate([f.normals for f in parts]),
+                   np.concatenate([f.centroids for f in parts]),
+                   np.concatenate([f.specular for f in parts]),
+                   np.concatenate([f.diffuse for f in parts]),
+                   np.concatenate([f.triangles for f in parts]),
+                   np.concatenate([f.triangle_facets + s for f, s in zip(parts, starts,
+                                                                          strict=True)]))
 
 
 def as_facets(shape, surface=None) -> Facets:

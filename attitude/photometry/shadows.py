@@ -7,34 +7,19 @@ faces both the Sun and the observer, starting a small distance above the centroi
 The test is per facet (no partial shadows inside a facet): the error shrinks with the
 facet size.
 
-embree is an optional dependency, installed by the ``shadows`` extra
-(``pip install "attitude-dynamics[shadows]"``, which brings ``embreex``).
+The rays go through :class:`attitude.raycast.Occluder`.  embree is an optional
+dependency, installed by the ``shadows`` extra (``pip install
+"attitude-dynamics[shadows]"``, which brings ``embreex``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from attitude.errors import MissingDependencyError
+from attitude.raycast import OFFSET_RTOL, Occluder
 from attitude.shape import Polyhedron
 
 __all__ = ["ShadowCaster"]
-
-# Rays start this fraction of the model's extent above the facet centroid, so that a
-# facet does not occlude itself (float32 inside embree: ~1e-7 relative rounding).
-_OFFSET_RTOL = 1e-5
-
-
-def _embree():
-    try:
-        # optional dependency (the "shadows" extra): imported only when shadows are asked
-        from embreex import rtcore_scene  # optional: the "shadows" extra
-        from embreex.mesh_construction import TriangleMesh  # optional: "shadows" extra
-    except ImportError:
-        raise MissingDependencyError(
-            "self-shadowing needs embree: pip install \"attitude-dynamics[shadows]\" (installs "
-            "embreex), or set shadows = false", key="shadows") from None
-    return rtcore_scene, TriangleMesh
 
 
 class ShadowCaster:
@@ -60,12 +45,10 @@ class ShadowCaster:
     """
 
     def __init__(self, shape: Polyhedron):
-        rtcore_scene, TriangleMesh = _embree()
-        self._scene = rtcore_scene.EmbreeScene()
-        TriangleMesh(self._scene, shape.vertices[shape.faces].astype(np.float32))
+        self._occluder = Occluder(shape.vertices[shape.faces])
         self._normals = shape.face_normals
         extent = float(np.ptp(shape.vertices, axis=0).max())
-        self._origins = shape.face_centroids + _OFFSET_RTOL * extent * self._normals
+        self._origins = shape.face_centroids + OFFSET_RTOL * extent * self._normals
 
     def visible(self, sun, observer) -> np.ndarray:
         """``(n, n_faces)`` float mask: 1 where the facet is lit and seen, else 0.
@@ -82,10 +65,10 @@ class ShadowCaster:
         mask = np.zeros(candidate.shape)
         if t_idx.size == 0:
             return mask
-        origins = self._origins[f_idx].astype(np.float32)
+        origins = self._origins[f_idx]
         both = np.concatenate([origins, origins])
-        dirs = np.concatenate([sun[t_idx], observer[t_idx]]).astype(np.float32)
-        hit = np.asarray(self._scene.run(both, dirs, query="OCCLUDED")) != -1
+        dirs = np.concatenate([sun[t_idx], observer[t_idx]])
+        hit = self._occluder.occluded(both, dirs)
         clear = ~(hit[: t_idx.size] | hit[t_idx.size:])
         mask[t_idx, f_idx] = clear
         return mask
