@@ -14,8 +14,9 @@ from ``default_rng([seed, k, i, 1])``), so any case can be re-run alone.
 
 * attitude data: 60 quaternions over 30 s, 0.05 deg per axis; guess perturbed by 0.01
   (rad and relative);
-* lightcurve data: 300 magnitudes over 120 s, 0.02 mag, of the 80-facet ellipsoid of
-  the same moments (the default law of LightcurveObservations), Sun along x, observer
+* lightcurve data: 300 magnitudes over 120 s, 0.02 mag, of the 1280-facet ellipsoid of
+  the same moments (``--subdivisions 3``; the tests use the 80-facet one, 1) with the
+  default law of LightcurveObservations, Sun along x, observer
   along (cos 0.4, sin 0.4, 0.2) (phase angle 25 deg); L drawn at |dec| <= 60 deg (the
   parameterisation by the direction of L is singular at the poles: see
   attitude.fitting.parameters); guess perturbed by 0.003.
@@ -23,11 +24,14 @@ from ``default_rng([seed, k, i, 1])``), so any case can be re-run alone.
 Part 1, coverage: for each case and parameter, whether ``|fitted - true| <= 2 sigma``
 (angles wrapped), with the fit's success flag and chi2.  Coverage per parameter, of the
 cases with all eight inside, of the (case, parameter) instances, and of the joint test
-``d^T C^-1 d <= chi2_8(95 %)``, each with its Clopper-Pearson 95 % interval; SAM and LAM
-apart and together.  A Gaussian gives 95.4 % per parameter, 95 % for the joint test, and
-for all eight at once the mean over the cases of P(all |z_i| <= 2) under each fit's own
-correlation matrix (Monte Carlo), printed as the expectation.  Fits reported
-unsuccessful are left out of the coverage and counted apart.
+``d^T C^-1 d <= chi2_8(95 %)`` (C the fit's covariance) and of the likelihood-ratio test
+``chi2(truth) - chi2(fit) <= chi2_8(95 %)`` (which needs no quadratic approximation of
+chi2, so it tells intervals that are too narrow from fits that went astray), each with
+its Clopper-Pearson 95 % interval; SAM and LAM apart and together.  A Gaussian gives
+95.4 % per parameter, 95 % for the joint and likelihood-ratio tests, and for all eight at
+once the mean over the cases of P(all |z_i| <= 2) under each fit's own correlation matrix
+(Monte Carlo), printed as the expectation.  Fits reported unsuccessful are left out of
+the coverage and counted apart.
 
 Part 2, convergence: the first 3 cases of each kind again, with the same noise
 realisation scaled by 1e-1, 1e-2, 1e-3, 1e-4: the error of the point estimate, the
@@ -37,6 +41,7 @@ estimator whose error is proportional to the noise).
 
     python benchmarks/fitting_coverage.py                 # 50 + 50 cases (minutes)
     python benchmarks/fitting_coverage.py --cases 20 --seed 3
+    python benchmarks/fitting_coverage.py --subdivisions 1   # the tests' 80 facets
     python benchmarks/fitting_coverage.py --quick         # smoke run, seconds
 
 Writes ``benchmarks/results/fitting_coverage.json`` (``--json`` elsewhere), atomically.
@@ -89,7 +94,7 @@ class Setup:
     t_att = np.linspace(0.0, 30.0, 60)
     sigma_lc = 0.02
     t_lc = np.linspace(0.0, 120.0, 300)
-    shape = att.Polyhedron.ellipsoid_from_moments(BODY.principal_moments, subdivisions=1)
+    shape = None                           # set by main (--subdivisions)
     geom = att.Geometry(sun=[1.0, 0.0, 0.0], observer=[np.cos(0.4), np.sin(0.4), 0.2])
     max_dec_lc = np.radians(60.0)
     perturb = {"attitude": 0.01, "lightcurve": 0.003}
@@ -145,6 +150,8 @@ def run_case(kind: str, i: int, seed: int) -> dict:
         mahal = float(dv @ np.linalg.solve(res.covariance, dv))
     except np.linalg.LinAlgError:
         mahal = float("nan")
+    r_true = res.objective.residuals(np.array([p_true[n] for n in PARAMETERS]))[0, :-1]
+    delta_chi2 = float(r_true @ r_true) - res.chi2
     return {"kind": kind, "index": i, "regime": regime, "fitted_regime": res.regime,
             "success": res.success, "message": res.message if not res.success else "",
             "chi2": res.chi2, "dof": res.dof,
@@ -152,6 +159,8 @@ def run_case(kind: str, i: int, seed: int) -> dict:
             "z": dict(zip(PARAMETERS, map(float, z))),
             "inside": {n: bool(abs(d[n]) <= 2 * res.uncertainties[n]) for n in PARAMETERS},
             "mahalanobis2": mahal, "joint_inside": bool(mahal <= chi2.ppf(0.95, 8)),
+            "delta_chi2_truth": delta_chi2,
+            "likelihood_ratio_inside": bool(delta_chi2 <= chi2.ppf(0.95, 8)),
             "p_all_inside_gauss": p_all_inside(res.covariance,
                                                np.random.default_rng([seed, 99, i])),
             "fit_seconds": elapsed}
@@ -175,6 +184,8 @@ def summarise(cases: list[dict]) -> dict:
     out["instances"] = proportion(sum(sum(c["inside"].values()) for c in ok),
                                   len(ok) * len(PARAMETERS))
     out["joint_chi2"] = proportion(sum(c["joint_inside"] for c in ok), len(ok))
+    out["likelihood_ratio"] = proportion(sum(c["likelihood_ratio_inside"] for c in ok),
+                                         len(ok))
     out["gauss_all_parameters"] = float(np.nanmean([c["p_all_inside_gauss"] for c in ok])) \
         if ok else float("nan")
     pulls = [(c["chi2"] - c["dof"]) / np.sqrt(2 * c["dof"]) for c in ok]
@@ -199,6 +210,7 @@ def print_coverage(summary: dict):
         print(f"| {SHORT[n]} | " + " | ".join(cell(summary[k][r][n]) for k, r in cols) + " |")
     rows = (("all 8 inside (cases)", "all_parameters"), ("(case, parameter) instances",
             "instances"), ("joint d'C^-1 d <= chi2_8(95 %)", "joint_chi2"),
+            ("chi2(truth) - chi2(fit) <= chi2_8(95 %)", "likelihood_ratio"),
             ("chi2 within dof +- 3 sqrt(2 dof)", "chi2_pull_within_3"))
     for label, key in rows:
         print(f"| {label} | " + " | ".join(cell(summary[k][r][key]) for k, r in cols) + " |")
@@ -249,15 +261,20 @@ def parse_args(argv=None):
     p.add_argument("--seed", type=int, default=2026, help="seed of the case draws")
     p.add_argument("--convergence-cases", type=int, default=3,
                    help="cases per data kind in the convergence part (default 3)")
+    p.add_argument("--subdivisions", type=int, default=3,
+                   help="of the lightcurve's ellipsoid: 1280 facets at 3 (default), 80 at 1")
     p.add_argument("--quick", action="store_true",
-                   help="smoke run: 4 attitude and 2 lightcurve cases, convergence on one "
-                        "case of each kind at two noise levels")
+                   help="smoke run: 4 attitude and 2 lightcurve cases (80 facets), "
+                        "convergence on one case of each kind at two noise levels")
     p.add_argument("--json", default=str(HERE / "results" / "fitting_coverage.json"),
                    help="where to write the results (default "
                         "benchmarks/results/fitting_coverage.json)")
     args = p.parse_args(argv)
-    if args.cases < 1 or args.convergence_cases < 0:
-        p.exit(2, "fitting_coverage.py: --cases must be >= 1 and --convergence-cases >= 0\n")
+    if args.cases < 1 or args.convergence_cases < 0 or not 0 <= args.subdivisions <= 4:
+        p.exit(2, "fitting_coverage.py: --cases must be >= 1, --convergence-cases >= 0 "
+               "and --subdivisions in 0..4\n")
+    if args.quick:
+        args.subdivisions = 1
     return args
 
 
@@ -267,6 +284,8 @@ def main(argv=None):
         KINDS, args.cases)
     n_conv = 1 if args.quick else args.convergence_cases
     levels = (1e-1, 1e-3) if args.quick else LEVELS
+    Setup.shape = att.Polyhedron.ellipsoid_from_moments(BODY.principal_moments,
+                                                        subdivisions=args.subdivisions)
     start = time.perf_counter()
     cases = {}
     for kind in KINDS:
@@ -290,8 +309,9 @@ def main(argv=None):
     if args.quick:
         print("QUICK RUN: a few cases, not the benchmark's numbers")
     print(f"\n1. Coverage: {n_cases['attitude']} attitude-data and {n_cases['lightcurve']} "
-          f"lightcurve cases (seed {args.seed}), all 8 parameters free; successful fits "
-          f"only; Gaussian: 95.4 % per parameter, 95 % joint ({t_cov:.0f} s)")
+          f"lightcurve cases ({len(Setup.shape.faces)} facets; seed {args.seed}), all 8 "
+          "parameters free; successful fits only; Gaussian: 95.4 % per parameter, 95 % "
+          f"joint ({t_cov:.0f} s)")
     print_coverage(summary)
     for kind in KINDS:
         for c in cases[kind]:
@@ -309,6 +329,7 @@ def main(argv=None):
             for r in c["rows"]) + f" | {c['slope']:.3f} |")
     print(f"\ntotal {elapsed:.0f} s")
     record = {"benchmark": "fitting_coverage", "quick": args.quick, "seed": args.seed,
+              "facets": len(Setup.shape.faces),
               "machine": info, "cases": cases, "summary": summary, "convergence": conv,
               "levels": list(levels), "elapsed_s": elapsed,
               "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
