@@ -21,6 +21,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..body import RigidBody
+from ..errors import AttitudeError
 from ..freebody import diagnose
 from ..propagation.propagator import propagate
 from ..state import AttitudeState
@@ -66,6 +67,11 @@ def random_state(body: RigidBody, regime: str, rng: np.random.Generator, *,
     -------
     AttitudeState
 
+    Raises
+    ------
+    AttitudeError
+        ``key="regime"`` for a regime other than SAM or LAM.
+
     Examples
     --------
     >>> import numpy as np, attitude as att
@@ -79,7 +85,7 @@ def random_state(body: RigidBody, regime: str, rng: np.random.Generator, *,
     True
     """
     if regime not in ("SAM", "LAM"):
-        raise ValueError(f"regime must be 'SAM' or 'LAM', not {regime!r}")
+        raise AttitudeError(f"must be 'SAM' or 'LAM', not {regime!r}", key="regime")
     while True:
         w = rng.normal(size=3)
         w[2 if regime == "SAM" else 0] *= 4
