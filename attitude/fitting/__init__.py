@@ -11,7 +11,10 @@ parameter vectors in one vectorised call:
 - :mod:`~attitude.fitting.leastsq` -- :func:`fit`: least squares with multi-start over
   the discrete ambiguities, covariance, regime and its margin;
 - :mod:`~attitude.fitting.posterior` -- :func:`sample_posterior`: MCMC with emcee (the
-  ``fitting`` extra), all walkers propagated as one batch.
+  ``fitting`` extra), all walkers propagated as one batch;
+- :mod:`~attitude.fitting.synthetic` -- closed loops on synthetic data: random hidden
+  states, noisy observations of them, perturbed first guesses (the tests and
+  ``benchmarks/fitting_coverage.py`` draw their cases with it).
 """
 
 from .leastsq import FitResult, fit
