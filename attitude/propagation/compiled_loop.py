@@ -256,8 +256,11 @@ def march_one(fc, torq, frame, moments, anchor, scheme, embedded, q0, w0, t0, ti
     we = np.empty(3)
     qb = np.empty(4)
     wb = np.empty(3)
+    qs = np.empty(4)
+    ws = np.empty(3)
     cache = np.zeros(4)
     cache_t = np.zeros(4)
+    cache_e = np.zeros(4)
     work = np.empty(80)
     pending = 0.0
     t_now = 0.0
@@ -299,6 +302,12 @@ def march_one(fc, torq, frame, moments, anchor, scheme, embedded, q0, w0, t0, ti
             if sign * (t_next - last) > -tol:
                 t_next = last
             pend_new = 0.0
+            # the embedded step starts from the state at the step boundary (one per step)
+            qs[:] = q
+            ws[:] = w
+            _any_kick(torq, frame, moments, anchor, t0 + t_now, qs, ws, pending, cache, work,
+                      rk_order)
+            w_scale = math.sqrt(ws[0] * ws[0] + ws[1] * ws[1] + ws[2] * ws[2])
             while True:
                 hh = t_next - t_now
                 qt[:] = q
@@ -311,17 +320,14 @@ def march_one(fc, torq, frame, moments, anchor, scheme, embedded, q0, w0, t0, ti
                 cache_t[3] = 0.0
                 _any_kick(torq, frame, moments, anchor, t0 + t_next, qb, wb, pend_new,
                           cache_t, work, rk_order)
-                qe[:] = q
-                we[:] = w
-                _any_kick(torq, frame, moments, anchor, t0 + t_now, qe, we, pending, cache,
-                          work, rk_order)
-                w_scale = math.sqrt(we[0] * we[0] + we[1] * we[1] + we[2] * we[2])
+                qe[:] = qs
+                we[:] = ws
+                cache_e[:] = cache
                 pe = _step(fc, torq, frame, moments, anchor, eb, ea, t0 + t_now, qe, we, 0.0,
-                           hh, cache, work, rk_order)
-                cache[3] = 0.0
-                _any_kick(torq, frame, moments, anchor, t0 + t_next, qe, we, pe, cache, work,
+                           hh, cache_e, work, rk_order)
+                cache_e[3] = 0.0
+                _any_kick(torq, frame, moments, anchor, t0 + t_next, qe, we, pe, cache_e, work,
                           rk_order)
-                cache[3] = 0.0
                 dq = 0.0                     # q and -q are one attitude
                 dqs = 0.0
                 dw = 0.0

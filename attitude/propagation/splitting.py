@@ -1132,8 +1132,17 @@ def _rtol_error(w0, q_hi, w_hi, q_lo, w_lo, rtol, w_floor) -> float:
     return float(np.max(err)) / rtol
 
 
+def _controller_exponent(scheme: _Scheme, embedded: _Scheme) -> float:
+    """Exponent of the step controller ``h (1/err)^expo``: ``1/(p+1)`` with ``p`` the
+    lower order of the pair, whose error the estimate measures; ``1/5`` for two order-4
+    compositions (the difference is then of order 5)."""
+    if embedded.order == scheme.order:
+        return 0.2
+    return 1.0 / (min(scheme.order, embedded.order) + 1.0)
+
+
 def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: str,
-           rtol: float | None = None, embedded: _Scheme | None = None,
+           rtol: float | None = None, embedded: _Scheme | None = None, expo: float = 0.0,
            w_floor: float = 0.0, h_limit: float = math.inf, bar=None) -> None:
     """Advance one direction of a run and hand every output to ``store(j, q, w)``.
 
@@ -1141,7 +1150,8 @@ def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: 
     all of one sign.  Modes: ``"dense"`` (steps of ``h`` from ``t0``, outputs inside a
     step by a partial step from its start), ``"cut"`` (each interval between outputs
     cut into equal steps no longer than ``h``) and ``"rtol"`` (steps chosen by the
-    error estimate, outputs as in ``"dense"``).
+    error estimate, outputs as in ``"dense"``; ``expo`` is the controller's exponent,
+    :func:`_controller_exponent`).
     """
     if not times:
         return
@@ -1149,10 +1159,6 @@ def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: 
     pending, cached, t_now, k = 0.0, None, 0.0, 0
     tol = SNAP * (abs(h) if math.isfinite(h) else abs(times[-1][1]))
     j = 0
-    expo = 0.0
-    if mode == "rtol":
-        low = min(stepper.scheme.order, embedded.order)
-        expo = 1.0 / (low + 1.0) if embedded.order != stepper.scheme.order else 0.2
     while j < len(times):
         idx, tj = times[j]
         if abs(tj - t_now) <= tol or tj == t_now:
@@ -1180,11 +1186,12 @@ def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: 
             last = times[-1][1]
             if sign * (t_next - last) > -tol:             # do not step past the last output
                 t_next = last
+            # the embedded step starts from the state at the step boundary (one per step)
+            q_b, w_b, cached = stepper.boundary(t0 + t_now, q, w, pending, cached)
             while True:
                 hh = t_next - t_now
                 q_pre, w_pre, pend_new = stepper.step(t0 + t_now, q, w, pending, hh, cached)
                 q_hi, w_hi, c_hi = stepper.boundary(t0 + t_next, q_pre, w_pre, pend_new, None)
-                q_b, w_b, cached = stepper.boundary(t0 + t_now, q, w, pending, cached)
                 ql, wl, pl = stepper.step(t0 + t_now, q_b, w_b, 0.0, hh, cached, embedded)
                 q_lo, w_lo, _ = stepper.boundary(t0 + t_next, ql, wl, pl, None)
                 err = _rtol_error(w_b, q_hi, w_hi, q_lo, w_lo, rtol, w_floor)
@@ -1245,7 +1252,7 @@ def _compiled_specs(system: _System, body_list, t0: float, t: np.ndarray, suppor
     return specs
 
 
-def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step, mode,
+def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h, h_limit, expo, mode,
                   rtol, scheme, embedded, rk_order, w_floor, anchor, out_q, out_w, bar):
     """Each body through :func:`attitude.propagation.compiled_loop.march_one`, the
     bodies of a batch on a thread per core (the compiled loop releases the GIL); the
@@ -1254,11 +1261,6 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, ste
     coeffs = (np.array(scheme.b), np.array(scheme.a))
     emb = embedded if embedded is not None else scheme
     ecoeffs = (np.array(emb.b), np.array(emb.a))
-    expo = 0.0
-    if mode == "rtol":
-        low = min(scheme.order, emb.order)
-        expo = 1.0 / (low + 1.0) if emb.order != scheme.order else 0.2
-    h_limit = math.inf if step is None else h_max
 
     def run(i, groups):
         fc = np.array(system.free.row(i), dtype=float)
@@ -1272,7 +1274,6 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, ste
             times = np.ascontiguousarray(t[idx], dtype=float)
             oq = np.empty((idx.size, 4))
             ow = np.empty((idx.size, 3))
-            h = h_max if mode != "rtol" else min(h_rule, h_max)
             code = compiled_loop.march_one(
                 fc, torq, frame, moments, anc, coeffs, ecoeffs,
                 np.ascontiguousarray(q_p0[i]), np.ascontiguousarray(w_p0[i]), t0, times,
@@ -1448,6 +1449,11 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         if emb == "blanes-moan" and attitude_only:
             emb = "blanes-moan-rkn"
         embedded = _Scheme(*_LIE) if emb == "lie" else _Scheme(*SCHEMES[emb])
+    # the loop's settings, the same for the numpy and the compiled loop: the first step
+    # (with rtol: the rule's, at most step=), the longest step, the controller's exponent
+    h_start = h_max if mode != "rtol" else min(h_rule, h_max)
+    h_limit = math.inf if step is None else h_max
+    expo = _controller_exponent(run_scheme, embedded) if mode == "rtol" else 0.0
 
     out_q = np.empty((n, t.size, 4))
     out_w = np.empty((n, t.size, 3))
@@ -1476,8 +1482,8 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
 
     try:
         if specs is not None:
-            _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_max, h_rule, step,
-                          mode, rtol, run_scheme, embedded, rk_order, w_floor, anchor,
+            _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h_start, h_limit,
+                          expo, mode, rtol, run_scheme, embedded, rk_order, w_floor, anchor,
                           out_q, out_w, bar)
             segments = []
         for idx in segments:
@@ -1485,10 +1491,9 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                 q, w = tuple(q_p0[0].tolist()), tuple(w_p0[0].tolist())
             else:
                 q, w = q_p0.copy(), w_p0.copy()
-            h = h_max if mode != "rtol" else min(h_rule, h_max)
-            _march(stepper, q, w, t0, [(int(j), float(t[j])) for j in idx], store, h,
-                   mode=mode, rtol=rtol, embedded=embedded, w_floor=w_floor,
-                   h_limit=math.inf if step is None else h_max, bar=bar)
+            _march(stepper, q, w, t0, [(int(j), float(t[j])) for j in idx], store, h_start,
+                   mode=mode, rtol=rtol, embedded=embedded, expo=expo, w_floor=w_floor,
+                   h_limit=h_limit, bar=bar)
     finally:
         bar.close()
     if system.identity:
