@@ -258,31 +258,37 @@ def to_si(value, unit, *, key: str | None = None, shape=None, positive: bool = F
     """
     key = key if key is not None else name
     target = u.Unit(unit)
-    if isinstance(value, u.Quantity):
-        q = value
-    elif isinstance(value, Mapping):
-        q = _from_table(value, target, key, error)
-    elif isinstance(value, str):
-        try:
-            q = u.Quantity(value)
-        except (ValueError, TypeError):
-            raise error(f"cannot parse {value!r} as a quantity; write a number and a unit "
-                        f"such as '{_hint(target)}'", key=key) from None
+    if isinstance(value, (u.Quantity, Mapping, str)):
+        out = _converted(_as_quantity(value, target, key, error), target, key, error)
     else:                     # numbers are already in ``unit``: no conversion to do
-        out = np.array(_numbers(value, key, error, target), dtype=float)
-        _check(out, target, key, error, shape=shape, positive=positive,
-               nonnegative=nonnegative, finite=finite, bounds=bounds)
-        return float(out) if out.ndim == 0 else out
-    source = _cycles(q.unit) if _is_angular(target) else q.unit
-    try:
-        out = (q.value * source).to_value(target, equivalencies=_equivalencies(target))
-    except u.UnitConversionError:
-        raise error(f"unit '{q.unit}' cannot be converted to '{_u(target)}' ({_not(target)}); "
-                    f"write e.g. '{_hint(target)}'", key=key) from None
+        out = _numbers(value, key, error, target)
     out = np.array(out, dtype=float)
     _check(out, target, key, error, shape=shape, positive=positive,
            nonnegative=nonnegative, finite=finite, bounds=bounds)
     return float(out) if out.ndim == 0 else out
+
+
+def _as_quantity(value, target, key, error) -> u.Quantity:
+    """A Quantity, a ``{value, unit}`` table or a string as a Quantity."""
+    if isinstance(value, u.Quantity):
+        return value
+    if isinstance(value, Mapping):
+        return _from_table(value, target, key, error)
+    try:
+        return u.Quantity(value)
+    except (ValueError, TypeError):
+        raise error(f"cannot parse {value!r} as a quantity; write a number and a unit "
+                    f"such as '{_hint(target)}'", key=key) from None
+
+
+def _converted(q: u.Quantity, target, key, error):
+    """The value of ``q`` in ``target`` (cycles count as 2 pi where an angle is wanted)."""
+    source = _cycles(q.unit) if _is_angular(target) else q.unit
+    try:
+        return (q.value * source).to_value(target, equivalencies=_equivalencies(target))
+    except u.UnitConversionError:
+        raise error(f"unit '{q.unit}' cannot be converted to '{_u(target)}' ({_not(target)}); "
+                    f"write e.g. '{_hint(target)}'", key=key) from None
 
 
 def _check(out, target, key, error, *, shape, positive, nonnegative, finite, bounds):
