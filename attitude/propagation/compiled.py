@@ -44,12 +44,13 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from .. import freebody as fb
 from .. import quaternion as quat
 
-__all__ = ["NUMBA", "jit", "ellipj", "elliprf", "elliprj", "free_flow_one"]
+__all__ = ["NUMBA", "jit", "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
 
 #: Unit roundoff of float64 (half the spacing of 1.0): the AGM's stopping test (Cephes'
 #: MACHEP) and Carlson's ``r``.
@@ -75,7 +76,8 @@ def _numba():
 #: source file of the function it loads, so a loop compiled against an older torque
 #: kernel would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
 #: cached code of all three when any of them changes.
-KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py")
+KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
+                  "compiled_dop853.py")
 
 
 def _drop_stale_cache() -> None:
@@ -130,6 +132,26 @@ def jit(function):
         return _NB.njit(cache=True, nogil=True, error_model="numpy")(function)
     except RuntimeError:          # no file to cache it beside (typed at a prompt, doctest)
         return _NB.njit(nogil=True, error_model="numpy")(function)
+
+
+def each_on_cores(run, n: int):
+    """``run(i)`` for ``i`` in ``range(n)``, yielding the results in order: on a thread
+    per core when :data:`NUMBA` (the compiled loops release the GIL), else one by one.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import each_on_cores
+    >>> list(each_on_cores(lambda i: i * i, 4))
+    [0, 1, 4, 9]
+    """
+    workers = min(n, os.cpu_count() or 1) if NUMBA else 1
+    if workers <= 1:
+        for i in range(n):
+            yield run(i)
+        return
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for done in [pool.submit(run, i) for i in range(n)]:
+            yield done.result()
 
 
 # ===========================================================================

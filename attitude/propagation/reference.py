@@ -27,8 +27,11 @@ from scipy.integrate import solve_ivp
 
 from .. import quaternion as quat
 from ..body import RigidBody
-from ..errors import PropagationError
+from ..errors import InvalidStateError, PropagationError
 from ..torques import internal_rate
+from . import compiled_dop853
+from .compiled import NUMBA, each_on_cores
+from .compiled_torques import compile_torques
 from .events import evaluate
 
 __all__ = ["integrate_reference", "integrate_reference_batch", "DEFAULT_RTOL",
@@ -71,7 +74,8 @@ def _rhs(body: RigidBody, torques: Sequence[Torque]):
 
 def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[Torque] = (),
                         rtol: float = DEFAULT_RTOL, atol_scale: float = DEFAULT_ATOL_SCALE,
-                        method: str = "DOP853") -> tuple[np.ndarray, np.ndarray]:
+                        method: str = "DOP853", compiled: bool | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Integrate one body from ``t = 0`` to every requested time.
 
     Parameters
@@ -89,6 +93,13 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
         Relative tolerance; absolute tolerance relative to each component's scale.
     method : str
         Any ``solve_ivp`` method (``"DOP853"``, ``"Radau"``, ...).
+    compiled : bool, optional
+        DOP853 compiled (:mod:`attitude.propagation.compiled_dop853`: scipy's method,
+        step control and dense output, the built-in torque models evaluated by
+        :func:`~attitude.propagation.compiled_torques.body_torque`): by default when numba
+        is installed, ``method="DOP853"`` and every torque model has a compiled form;
+        ``False`` runs scipy's ``solve_ivp`` (the independent check); ``True`` raises if
+        the compiled path cannot run (without numba it runs as slow plain Python).
 
     Returns
     -------
@@ -109,12 +120,45 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
     True
     """
     t = np.asarray(t, dtype=float)
+    spec = _compiled_form(body, torques, t, method, compiled)
+    return _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec)
+
+
+def _compiled_form(body: RigidBody, torques, t: np.ndarray, method: str,
+                   compiled: bool | None):
+    """The torques of :func:`compiled_dop853.dop853_one` (``(external, internal,
+    has_internal)``) when the compiled path is chosen and can run, else None."""
+    if compiled is False or (compiled is None and not NUMBA):
+        return None
+    if method != "DOP853":
+        if compiled:
+            raise InvalidStateError(f"compiled=True: only DOP853 is compiled, not "
+                                    f"{method!r}", key="compiled")
+        return None
+    span = (float(min(0.0, np.min(t, initial=0.0))), float(max(0.0, np.max(t, initial=0.0))))
+    groups = []
+    for internal in (False, True):
+        models = [m for m in torques if (getattr(m, "internal", False) is True) == internal]
+        c = compile_torques(models, body, t_span=span)
+        if c is None:
+            if compiled:
+                raise InvalidStateError("compiled=True: a torque model has no compiled "
+                                        "form (a Python function or model); use "
+                                        "compiled=None", key="compiled")
+            return None
+        groups.append((c.kinds, c.offsets, c.params))
+    has_internal = any(getattr(m, "internal", False) is True for m in torques)
+    return groups[0], groups[1], has_internal
+
+
+def _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec):
     y0 = np.concatenate([np.asarray(quat0, float), np.asarray(omega0, float)])
     # Rates set the absolute tolerance of the rate components; a body at rest (spun up by
     # a torque) falls back to 1 rad/s, i.e. atol = atol_scale rad/s.
     scale = float(np.linalg.norm(omega0)) or 1.0
     atol = atol_scale * np.array([1.0] * 4 + [scale] * 3)
-    rhs = _rhs(body, tuple(torques))
+    rhs = _rhs(body, tuple(torques)) if spec is None else None
+    inertia = np.ascontiguousarray(body.inertia, dtype=float)
     out = np.empty((t.size, 7))
     for sign in (1.0, -1.0):
         idx = np.flatnonzero(t >= 0) if sign > 0 else np.flatnonzero(t < 0)
@@ -126,21 +170,35 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
         if end == 0.0:
             out[order] = y0
             continue
-        sol = solve_ivp(rhs, (0.0, end), y0, method=method, t_eval=t_eval, rtol=rtol,
-                        atol=atol)
+        if spec is not None:
+            res = np.empty((t_eval.size, 7))
+            code = compiled_dop853.dop853_one(
+                spec, inertia, np.linalg.inv(inertia), y0, np.ascontiguousarray(t_eval),
+                sign, float(rtol), atol, compiled_dop853.TABLEAU, res)
+            if code < 0:
+                raise PropagationError(
+                    f"{method} integration failed before {t_eval[-code - 1]:.6g} s: the "
+                    "step size fell below the spacing of the floating-point times")
+            out[order] = res
+            continue
+        # solve_ivp wants strictly ordered times: a repeated time is asked for once
+        first = np.concatenate([[True], t_eval[1:] != t_eval[:-1]])
+        sol = solve_ivp(rhs, (0.0, end), y0, method=method, t_eval=t_eval[first],
+                        rtol=rtol, atol=atol)
         if not sol.success:
             reached = f"{sol.t[-1]:.6g} s" if sol.t.size else "the first step"
             raise PropagationError(f"{method} integration failed at {reached}: {sol.message}")
-        out[order] = sol.y.T
+        out[order] = sol.y.T[np.cumsum(first) - 1]
     q = out[:, :4] / np.linalg.norm(out[:, :4], axis=1, keepdims=True)
     return q, out[:, 4:]
 
 
 def integrate_reference_batch(bodies: Sequence[RigidBody], quat0, omega0, t, **kwargs
                               ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`integrate_reference` for each of N bodies (one after the other: each has
-    its own adaptive steps): ``quat0`` (N, 4), ``omega0`` (N, 3) -> ``(N, T, 4),
-    (N, T, 3)``; ``kwargs`` as for :func:`integrate_reference`.
+    """:func:`integrate_reference` for each of N bodies (each with its own adaptive
+    steps; on the compiled path on a thread per core, else one after the other):
+    ``quat0`` (N, 4), ``omega0`` (N, 3) -> ``(N, T, 4), (N, T, 3)``; ``kwargs`` as for
+    :func:`integrate_reference`.
 
     Examples
     --------
@@ -153,8 +211,21 @@ def integrate_reference_batch(bodies: Sequence[RigidBody], quat0, omega0, t, **k
     >>> q.shape, w.shape
     ((2, 3, 4), (2, 3, 3))
     """
-    results = [integrate_reference(b, quat0[i], omega0[i], t, **kwargs)
-               for i, b in enumerate(bodies)]
+    t = np.asarray(t, dtype=float)
+    options = {"torques": (), "rtol": DEFAULT_RTOL, "atol_scale": DEFAULT_ATOL_SCALE,
+               "method": "DOP853", "compiled": None} | kwargs
+    compiled = options.pop("compiled")
+    specs = [_compiled_form(b, options["torques"], t, options["method"], compiled)
+             for b in bodies]
+    if any(spec is None for spec in specs):
+        # a model without a compiled form: Python torques, one body after the other
+        results = [_integrate(b, quat0[i], omega0[i], t, spec=None, **options)
+                   for i, b in enumerate(bodies)]
+    else:
+        # the compiled integrator releases the GIL: the bodies run on all cores
+        results = list(each_on_cores(
+            lambda i: _integrate(bodies[i], quat0[i], omega0[i], t, spec=specs[i],
+                                 **options), len(bodies)))
     return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
 
 

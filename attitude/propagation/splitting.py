@@ -69,11 +69,9 @@ References
 from __future__ import annotations
 
 import math
-import os
 import sys
 import time as _time
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from scipy import special as sp
@@ -1288,15 +1286,8 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h, h_limit, expo, 
             out_w[i, idx] = ow
         return sum(abs(float(t[idx][-1])) for idx in segments) / len(specs)
 
-    workers = min(len(specs), os.cpu_count() or 1) if compiled_loop.NUMBA else 1
-    if workers <= 1:
-        for i, groups in enumerate(specs):
-            bar.update(run(i, groups))
-        return
-    # the compiled loop releases the GIL: the bodies of a batch run on all cores
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        for done in [pool.submit(run, i, groups) for i, groups in enumerate(specs)]:
-            bar.update(done.result())
+    for done in compiled.each_on_cores(lambda i: run(i, specs[i]), len(specs)):
+        bar.update(done)
 
 
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
