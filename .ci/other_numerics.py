@@ -40,6 +40,7 @@ NUMERIC_TESTS = [
     "tests/test_state.py", "tests/test_streaming.py", "tests/test_ephemeris.py",
     "tests/test_events.py", "tests/tolerances.py", "tests/test_compiled.py",
     "tests/test_compiled_torques.py", "tests/test_compiled_loop.py",
+    "tests/test_compiled_dop853.py",
 ]
 
 
