@@ -41,7 +41,14 @@ from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
 from attitude.orbit import KeplerOrbit  # noqa: E402
-from attitude.propagation.reference import integrate_reference  # noqa: E402
+from attitude.propagation.reference import integrate_reference as _reference  # noqa: E402
+
+
+def integrate_reference(*args, **kwargs):
+    """scipy's DOP853 (``compiled=False``): the tables of docs/integrators.md compare the
+    splitting with scipy's integrator; the compiled DOP853 is measured by
+    benchmarks/perturbed.py."""
+    return _reference(*args, compiled=False, **kwargs)
 from attitude.propagation.splitting import choose_step, integrate_splitting  # noqa: E402
 from attitude.torques import EARTH_MU, GravityGradient  # noqa: E402
 

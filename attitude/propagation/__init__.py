@@ -9,7 +9,10 @@ it, one module each:
   double-double arithmetic);
 - :mod:`.splitting`: the splitting integrator with torques (exact free flow composed with
   torque kicks, orders 2, 4 and 6);
-- :mod:`.reference`: the DOP853 reference integrator of Euler's equations;
+- :mod:`.reference`: the DOP853 reference integrator of Euler's equations (scipy's, or
+  the same method compiled: :mod:`.compiled_dop853`);
+- :mod:`.compiled`, :mod:`.compiled_torques`, :mod:`.compiled_loop`: the numba kernels
+  (elliptic functions and the free flow, the torque models, the splitting loop);
 - :mod:`.events`: events located on any method's solution;
 - :mod:`.batch`: populations in chunks, in this process or as dask tasks, and
   :mod:`.cluster` for dask clusters.

@@ -104,9 +104,11 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         free flow composed with torque kicks
         (:func:`attitude.propagation.splitting.integrate_splitting`; symplectic for
         attitude-only torques, a whole batch in one vectorised run).
-        ``"integrator"``: DOP853 on Euler's equations (the reference; one body at a
-        time).  Default: ``"exact"`` without torques; with torques ``"splitting"``,
-        or ``"integrator"`` if ``rtol`` is given.
+        ``"integrator"``: DOP853 on Euler's equations (the reference; each body with
+        its own steps; compiled with numba when every torque model is built in,
+        :mod:`attitude.propagation.compiled_dop853`, the bodies of a batch on a thread
+        per core; else scipy's ``solve_ivp``).  Default: ``"exact"`` without torques;
+        with torques ``"splitting"``, or ``"integrator"`` if ``rtol`` is given.
     rtol : float, optional
         Relative tolerance: of the ``"integrator"`` method (default 1e-13), or, with
         ``method="splitting"``, the error control of the splitting (each step's
