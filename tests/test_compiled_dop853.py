@@ -141,3 +141,24 @@ def test_propagate_integrator_uses_it():
                                compiled=compiled.NUMBA)
     assert_agree(attitude_angle(eph.dataset.quaternion.values, q), 0.0 * TIMES,
                  ulps=8, magnitude=1.0, what="attitude angle")
+
+
+@pytest.mark.parametrize("rtol", [0.0, -1e-3, float("nan"), 1.0, "1e-8"])
+def test_bad_rtol_is_refused(rtol):
+    """rtol outside (0, 1) is an error naming the key, on both paths (the compiled loop
+    would otherwise creep at atol-sized steps or never accept one)."""
+    body = att.RigidBody(INERTIA)
+    for flag in (True, False):
+        with pytest.raises(InvalidStateError, match="rtol"):
+            integrate_reference(body, Q0, W0, [0.0, 10.0], rtol=rtol, compiled=flag)
+
+
+def test_tiny_rtol_is_raised_to_100_eps_as_scipy_does():
+    """Below 100 eps scipy raises rtol to 100 eps; the compiled path does the same, so
+    the two stay within the tolerance of each other."""
+    body = att.RigidBody(INERTIA)
+    t = np.linspace(0.0, 200.0, 5)
+    q1, _ = integrate_reference(body, Q0, W0, t, rtol=1e-17, compiled=True)
+    q2, _ = integrate_reference(body, Q0, W0, t, rtol=1e-17, compiled=False)
+    assert_agree(attitude_angle(q1, q2), 0.0 * t, ulps=INTEGRATOR_PATHS * 100.0,
+                 magnitude=1.0, what="attitude angle")

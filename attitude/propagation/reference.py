@@ -124,6 +124,14 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
     return _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec)
 
 
+def _check_rtol(rtol) -> float:
+    """rtol in (0, 1); below 100 eps raised to it, as scipy's solvers do (silently)."""
+    if not (isinstance(rtol, (int, float, np.floating)) and 0.0 < float(rtol) < 1.0):
+        raise InvalidStateError(f"rtol: expected a number in (0, 1), got {rtol!r}",
+                                key="rtol")
+    return max(float(rtol), 100.0 * np.finfo(float).eps)
+
+
 def _compiled_form(body: RigidBody, torques, t: np.ndarray, method: str,
                    compiled: bool | None):
     """The torques of :func:`compiled_dop853.dop853_one` (``(external, internal,
@@ -152,6 +160,7 @@ def _compiled_form(body: RigidBody, torques, t: np.ndarray, method: str,
 
 
 def _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec):
+    rtol = _check_rtol(rtol)
     y0 = np.concatenate([np.asarray(quat0, float), np.asarray(omega0, float)])
     # Rates set the absolute tolerance of the rate components; a body at rest (spun up by
     # a torque) falls back to 1 rad/s, i.e. atol = atol_scale rad/s.
@@ -262,7 +271,7 @@ def integrate_reference_events(body: RigidBody, quat0, omega0, t, events, *,
     if end == 0.0:
         out[:] = y0
         return out[:, :4], out[:, 4:], []
-    sol = solve_ivp(rhs, (0.0, end), y0, method=method, t_eval=t[order], rtol=rtol,
+    sol = solve_ivp(rhs, (0.0, end), y0, method=method, t_eval=t[order], rtol=_check_rtol(rtol),
                     atol=atol, events=[wrap(ev) for ev in events])
     if sol.status < 0:
         reached = f"{sol.t[-1]:.6g} s" if sol.t.size else "the first step"
