@@ -34,7 +34,7 @@ from .compiled import NUMBA, each_on_cores
 from .compiled_torques import compile_torques
 from .events import evaluate
 
-__all__ = ["integrate_reference", "integrate_reference_batch", "DEFAULT_RTOL",
+__all__ = ["integrate_reference", "integrate_reference_batch", "checked_rtol", "DEFAULT_RTOL",
            "DEFAULT_ATOL_SCALE"]
 
 #: Relative tolerance of the reference integrator.
@@ -124,12 +124,29 @@ def integrate_reference(body: RigidBody, quat0, omega0, t, *, torques: Sequence[
     return _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec)
 
 
-def _check_rtol(rtol) -> float:
-    """rtol in (0, 1); below 100 eps raised to it, as scipy's solvers do (silently)."""
+def checked_rtol(rtol) -> float:
+    """A relative tolerance as a float, or InvalidStateError naming ``rtol`` unless it is
+    a number in (0, 1) (the integrator and the splitting's error control).
+
+    Examples
+    --------
+    >>> from attitude.propagation.reference import checked_rtol
+    >>> checked_rtol(1e-8)
+    1e-08
+    >>> checked_rtol(0.0)
+    Traceback (most recent call last):
+    ...
+    attitude.errors.InvalidStateError: rtol: rtol: expected a number in (0, 1), got 0.0
+    """
     if not (isinstance(rtol, (int, float, np.floating)) and 0.0 < float(rtol) < 1.0):
         raise InvalidStateError(f"rtol: expected a number in (0, 1), got {rtol!r}",
                                 key="rtol")
-    return max(float(rtol), 100.0 * np.finfo(float).eps)
+    return float(rtol)
+
+
+def _check_rtol(rtol) -> float:
+    """:func:`checked_rtol`, raised to 100 eps as scipy's solvers do (silently)."""
+    return max(checked_rtol(rtol), 100.0 * np.finfo(float).eps)
 
 
 def _compiled_form(body: RigidBody, torques, t: np.ndarray, method: str,
@@ -168,6 +185,7 @@ def _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec):
     atol = atol_scale * np.array([1.0] * 4 + [scale] * 3)
     rhs = _rhs(body, tuple(torques)) if spec is None else None
     inertia = np.ascontiguousarray(body.inertia, dtype=float)
+    inverse = np.linalg.inv(inertia) if spec is not None else None
     out = np.empty((t.size, 7))
     for sign in (1.0, -1.0):
         idx = np.flatnonzero(t >= 0) if sign > 0 else np.flatnonzero(t < 0)
@@ -182,7 +200,7 @@ def _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec):
         if spec is not None:
             res = np.empty((t_eval.size, 7))
             code = compiled_dop853.dop853_one(
-                spec, inertia, np.linalg.inv(inertia), y0, np.ascontiguousarray(t_eval),
+                spec, inertia, inverse, y0, np.ascontiguousarray(t_eval),
                 sign, float(rtol), atol, compiled_dop853.TABLEAU, res)
             if code < 0:
                 raise PropagationError(

@@ -85,6 +85,7 @@ from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
 from ..torques import as_torque_model
 from . import compiled, compiled_loop
 from .compiled_torques import compile_torques
+from .reference import checked_rtol
 
 __all__ = [
     "integrate_splitting",
@@ -1407,10 +1408,8 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     t = np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1 or not np.all(np.isfinite(t)):
         raise InvalidStateError("t: expected a 1-D array of finite times (s)")
-    if rtol is not None and not (isinstance(rtol, (int, float, np.floating))
-                                 and 0.0 < float(rtol) < 1.0):
-        raise InvalidStateError(f"rtol: expected a number in (0, 1), got {rtol!r}",
-                                key="rtol")
+    if rtol is not None:
+        checked_rtol(rtol)
     t0 = float(t0)
     t = t - t0
     q_p0, w_p0 = system.to_principal(q0, w0)
