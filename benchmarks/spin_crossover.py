@@ -18,7 +18,6 @@ from __future__ import annotations
 import json
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +26,7 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from _machine import cpu_name  # noqa: E402
+from perturbed import attitude_error, best_of, quaternions  # noqa: E402  (same folder)
 
 import attitude as att  # noqa: E402
 from attitude.ephemeris import write_atomically  # noqa: E402
@@ -41,19 +41,8 @@ STEPS = (600.0, 300.0, 120.0, 60.0, 30.0, 15.0, 10.0, 5.0, 2.0, 1.0, 0.5, 0.2)
 RTOLS = (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 
 
-def best_of(fn, n=3):
-    fn()
-    best = np.inf
-    for _ in range(n):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def error(eph, q_ref) -> float:
-    q = np.asarray(eph.dataset.quaternion.values)
-    return float(np.max((Rotation.from_quat(q) * Rotation.from_quat(q_ref).inv()).magnitude()))
+    return attitude_error(quaternions(eph), q_ref)
 
 
 def one_rate(rate_deg):
@@ -75,7 +64,7 @@ def one_rate(rate_deg):
                                  order=4, step=s)
         err = error(run(), q_ref)
         if err <= TARGET:
-            result["splitting"] = {"step_s": h, "error_rad": err, "wall_s": best_of(run)}
+            result["splitting"] = {"step_s": h, "error_rad": err, "wall_s": best_of(run)[0]}
             break
     for rtol in RTOLS:
         def run(r=rtol):
@@ -83,7 +72,7 @@ def one_rate(rate_deg):
                                  rtol=r)
         err = error(run(), q_ref)
         if err <= TARGET:
-            result["dop853"] = {"rtol": rtol, "error_rad": err, "wall_s": best_of(run)}
+            result["dop853"] = {"rtol": rtol, "error_rad": err, "wall_s": best_of(run)[0]}
             break
     return result
 
