@@ -51,6 +51,7 @@ __all__ = [
     "ConstantPosition",
     "as_path",
     "solve_kepler",
+    "solve_kepler_scalar",
     "mean_from_eccentric",
 ]
 
@@ -146,7 +147,7 @@ def solve_kepler(M, e, *, max_iter: int = 50):
     if e.ndim == 0 and e == 0.0:
         return M.copy() if M.ndim else float(M)
     if M.ndim == 0 and e.ndim == 0:
-        return _solve_kepler_scalar(float(M), float(e), max_iter)
+        return solve_kepler_scalar(float(M), float(e), max_iter)
     shape = np.broadcast_shapes(M.shape, e.shape)
     M = np.broadcast_to(M, shape).ravel()
     e = np.broadcast_to(e, shape).ravel()
@@ -189,23 +190,52 @@ def _starting_value(x, e):
     return np.where(np.isfinite(cubic) & (cubic < 1.0), cubic, x + 0.85 * e)
 
 
-def _solve_kepler_scalar(M: float, e: float, max_iter: int) -> float:
-    """The same iteration as :func:`solve_kepler` in plain floats (no numpy overhead:
-    integrators call torque models one epoch at a time)."""
+def solve_kepler_scalar(M: float, e: float, max_iter: int = 50) -> float:
+    """:func:`solve_kepler` for one mean anomaly, in plain floats.
+
+    The same reduction, starting value, Halley iteration and stopping rule without numpy
+    overhead (integrators call torque models one epoch at a time); also the compiled
+    torques' solver (:mod:`attitude.propagation.compiled_torques` compiles this function
+    with numba, so the two agree bit for bit).
+
+    Parameters
+    ----------
+    M : float
+        Mean anomaly, rad (any value).
+    e : float
+        Eccentricity, ``0 <= e < 1`` (not checked here: :func:`solve_kepler` checks).
+    max_iter : int
+        Most Halley iterations.
+
+    Returns
+    -------
+    float
+        Eccentric anomaly, rad, in the same turn as ``M``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from attitude.orbit import solve_kepler_scalar
+    >>> E = solve_kepler_scalar(1.0, 0.3)
+    >>> abs(E - 0.3 * math.sin(E) - 1.0) < 1e-15
+    True
+    """
     turns = round(M / _TWO_PI)
     Mr = M - turns * _TWO_PI
     sign = -1.0 if Mr < 0 else 1.0
     x = abs(Mr)
     lo, hi = x, min(x + e, math.pi)
     E = x + 0.85 * e
-    if e > 0.0:
+    if e <= 0.0:
+        return M
+    # the cubic (1 - e) E + e E^3 / 6 = x increases with E, so its root is below 1 only
+    # for x < 1 - 5 e / 6: skip its sinh and asinh beyond (a margin, 0.8 e, for rounding)
+    if x < 1.0 - 0.8 * e:
         p = 6.0 * (1.0 - e) / e
         cubic = 2.0 * math.sqrt(p / 3.0) * math.sinh(
             math.asinh(1.5 * (6.0 * x / e) / p * math.sqrt(3.0 / p)) / 3.0)
         if cubic < 1.0:
             E = cubic
-    else:
-        return M
     E = min(max(E, lo), hi)
     for _ in range(max_iter):
         se, ce = math.sin(E), math.cos(E)
@@ -408,7 +438,7 @@ class KeplerOrbit:
         """Eccentric anomaly at ``t`` (s since the epoch), rad."""
         if np.ndim(t) == 0:                   # the integrators' one-epoch-at-a-time path
             M = self.mean_anomaly + self.mean_motion * float(t)
-            return np.asarray(M if self.e == 0.0 else _solve_kepler_scalar(M, self.e, 50))
+            return np.asarray(M if self.e == 0.0 else solve_kepler_scalar(M, self.e, 50))
         return np.asarray(solve_kepler(self.mean_anomaly_at(t), self.e))
 
     def true_anomaly(self, t) -> np.ndarray:

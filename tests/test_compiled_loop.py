@@ -195,7 +195,7 @@ def test_numba_flag_is_what_the_platform_offers():
 @pytest.mark.skipif(not compiled_loop.NUMBA, reason="numba's cache only exists with numba")
 def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
     """numba checks only a function's own file: the package clears the cached code of
-    its kernels when any of the three modules changes (the loop inlines the others)."""
+    its kernels when any of their sources changes (the loop inlines the others)."""
     import hashlib
     from pathlib import Path
 
@@ -204,7 +204,7 @@ def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
     here = Path(compiled.__file__).parent
     stamp = here / "__pycache__" / "attitude-kernels.sha1"
     digest = hashlib.sha1(b"".join((here / n).read_bytes()
-                                   for n in compiled.KERNEL_MODULES)).hexdigest()
+                                   for n in compiled.KERNEL_SOURCES)).hexdigest()
     if stamp.is_file():                  # absent only where the folder is read-only
         assert stamp.read_text() == digest
         stale = here / "__pycache__" / "compiled_loop.stale-test.nbi"

@@ -75,19 +75,24 @@ def _numba():
 #: The modules whose jitted functions call one another.  numba's cache checks only the
 #: source file of the function it loads, so a loop compiled against an older torque
 #: kernel would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
-#: cached code of all three when any of them changes.
+#: cached code of all of them when any of :data:`KERNEL_SOURCES` changes.
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "compiled_dop853.py")
+#: The sources compiled into the kernels: theirs and the Kepler solver of
+#: :mod:`attitude.orbit` (compiled by :mod:`.compiled_torques`; numba keeps that one's
+#: own cache fresh, not the callers').
+KERNEL_SOURCES = KERNEL_MODULES + ("../orbit.py",)
 
 
 def _drop_stale_cache() -> None:
-    """Delete numba's cached code of :data:`KERNEL_MODULES` when their sources changed
-    (a stamp of their SHA-1 beside the cache); silent where the folder is read-only."""
+    """Delete numba's cached code of :data:`KERNEL_MODULES` when :data:`KERNEL_SOURCES`
+    changed (a stamp of their SHA-1 beside the cache); silent where the folder is
+    read-only."""
     here = Path(__file__).parent
     folder = here / "__pycache__"
     try:
         digest = hashlib.sha1(b"".join((here / name).read_bytes()
-                                       for name in KERNEL_MODULES)).hexdigest()
+                                       for name in KERNEL_SOURCES)).hexdigest()
         stamp = folder / "attitude-kernels.sha1"
         if stamp.is_file() and stamp.read_text() == digest:
             return

@@ -66,6 +66,7 @@ import numpy as np
 
 from ..body import RigidBody
 from ..errors import InvalidStateError
+from ..orbit import solve_kepler_scalar
 from ..torques import TorqueModel
 from .compiled import NUMBA
 from .compiled import jit as _jit
@@ -87,44 +88,12 @@ _FIXED, _KEPLER, _PIECEWISE = 0.0, 1.0, 2.0
 _FIELDS = {"uniform": 0, "tilted_dipole": 1, "piecewise_cubic": 2}
 _UNIFORM, _DIPOLE = 0.0, 1.0
 
-_EPS = float(np.finfo(float).eps)
-_TWO_PI = 2.0 * math.pi
-
-
 # --- kernels ----------------------------------------------------------------------------
 
 
-@_jit
-def _eccentric_anomaly(M, e):
-    """:func:`attitude.orbit.solve_kepler` for one ``M`` and ``0 < e < 1``: the same
-    reduction, starting value (Danby's, or the cubic near periapsis), Halley iteration
-    clipped to the bracket, and stopping rule (at most 50 iterations)."""
-    turns = np.rint(M / _TWO_PI)          # round half to even, as Python's round()
-    Mr = M - turns * _TWO_PI
-    sign = -1.0 if Mr < 0 else 1.0
-    x = abs(Mr)
-    lo, hi = x, min(x + e, math.pi)
-    E = x + 0.85 * e
-    # the cubic (1 - e) E + e E^3 / 6 = x increases with E, so its root is below 1 only
-    # for x < 1 - 5 e / 6: skip its sinh and asinh beyond (a margin, 0.8 e, for rounding)
-    if x < 1.0 - 0.8 * e:
-        p = 6.0 * (1.0 - e) / e
-        cubic = 2.0 * math.sqrt(p / 3.0) * math.sinh(
-            math.asinh(1.5 * (6.0 * x / e) / p * math.sqrt(3.0 / p)) / 3.0)
-        if cubic < 1.0:
-            E = cubic
-    E = min(max(E, lo), hi)
-    for _ in range(50):
-        se, ce = math.sin(E), math.cos(E)
-        f = E - e * se - x
-        f1 = 1.0 - e * ce
-        newton = -f / f1
-        En = min(max(E - f / (f1 + 0.5 * newton * e * se), lo), hi)
-        if abs(En - E) <= 4.0 * _EPS * max(En, 1.0) or abs(f) <= 2.0 * _EPS * E:
-            E = En
-            break
-        E = En
-    return sign * E + turns * _TWO_PI
+#: :func:`attitude.orbit.solve_kepler` for one ``M``: the scalar form of its iteration,
+#: compiled (one solver for the Python and the compiled torques).
+_eccentric_anomaly = _jit(solve_kepler_scalar)
 
 
 @_jit
@@ -189,7 +158,7 @@ def _velocity(params, i, t):
     if kind == _KEPLER:
         a, e, b = params[i + 1], params[i + 2], params[i + 3]
         M = params[i + 4] + params[i + 5] * t
-        E = M if e == 0.0 else _eccentric_anomaly(M, e)
+        E = _eccentric_anomaly(M, e, 50)
         cE, sE = math.cos(E), math.sin(E)
         f = math.sqrt(params[i + 6] * a) / (a * (1.0 - e * cE))
         bc = b * cE
@@ -316,7 +285,7 @@ def _position(params, i, t):
     if kind == _KEPLER:
         a, e, b = params[i + 1], params[i + 2], params[i + 3]
         M = params[i + 4] + params[i + 5] * t
-        E = M if e == 0.0 else _eccentric_anomaly(M, e)
+        E = _eccentric_anomaly(M, e, 50)
         cE, sE = math.cos(E), math.sin(E)
         ce = cE - e
         bs = b * sE
