@@ -8,52 +8,51 @@ Mass properties in, time-tagged attitude ephemerides out::
     eph = att.propagate(body, state, times)
     eph.to_netcdf("out.nc")
 
-The package follows the pipeline *mass properties -> state -> propagation -> ephemeris
--> analysis -> formats / CLI* (docs/architecture.md): model modules at the top level
-(``body``, ``shape``, ``state``, ``orbit``, ``torques``, ``ephemeris``, ``population``),
-the propagation wing (``attitude.propagation``), the analysis modules (``diagnostics``,
-``classify``, ``lyapunov``, ``statistics``), the file-format wing (``attitude.formats``)
-and the application layer (``scenario``, ``cli``, ``plot``).  The public names are in
-``__all__``.
+The package is laid out in layers (docs/architecture.md): ``attitude.foundations``
+(errors, quantities and epochs, quaternions, elliptic functions, constants, table specs),
+``attitude.model`` (bodies, shapes, states, orbits, torques, ephemerides, populations),
+``attitude.propagation``, ``attitude.analysis`` (diagnostics, classification, Lyapunov
+exponents, statistics), the wings (``formats``, ``photometry``, ``fitting``,
+``environment``, ``spinorbit``) and ``attitude.app`` (scenario files, the CLI, plots).
+
+The public names are in ``__all__``; each is imported on first use, so that
+``import attitude`` (and ``attitude --help``) loads no more than the exceptions.
 """
 
 from __future__ import annotations
 
+import importlib
 import sys
 
-from . import (
-    ensemble,  # noqa: F401  (att.ensemble.regime_fractions, ...)
-    errors,
-    quantities,  # noqa: F401  (registers the 'rev' and 'rpm' units with astropy)
-    torques,  # noqa: F401  (att.torques.GravityGradient, ...)
-)
-from .body import SYMMETRY_RTOL, TRIANGLE_RTOL, MassProperties, RigidBody
-from .classify import Classification, classify
 from .deprecation import MOVED_MODULES, install
-from .environment import IGRF, TLEOrbit
-from .ephemeris import Ephemeris
-from .errors import *  # noqa: F403  (every exception and warning: errors.__all__)
-from .fitting import (
-    AngularVelocityObservations,
-    AttitudeObservations,
-    LightcurveObservations,
-    PeriodObservations,
-    fit,
-    sample_posterior,
-)
-from .freebody import diagnose
-from .orbit import KeplerOrbit
-from .photometry import Geometry, Lightcurve, PeriodFit, fit_periods, lightcurve, read_lightcurve
-from .population import Ensemble
-from .propagation.events import Event, event_table, nutation_crossing
-from .propagation.propagator import propagate
-from .shape import Polyhedron
-from .spinorbit import SpinOrbit
-from .state import INERTIAL_FRAMES, AttitudeState
+from .foundations.errors import *  # noqa: F403  (every exception and warning: errors.__all__)
+from .foundations.errors import __all__ as _error_names
 from .version import __version__
 
 install()   # the module paths of earlier releases (attitude.splitting, ...) as aliases
 
+#: Public name -> the module that owns it (imported on first use, PEP 562).
+_OWNERS = {
+    "RigidBody": "model.body", "MassProperties": "model.body",
+    "SYMMETRY_RTOL": "model.body", "TRIANGLE_RTOL": "model.body",
+    "AttitudeState": "model.state", "INERTIAL_FRAMES": "model.state",
+    "Ephemeris": "model.ephemeris", "Ensemble": "model.population",
+    "KeplerOrbit": "model.orbit", "Polyhedron": "model.shape",
+    "diagnose": "model.freebody",
+    "Event": "propagation.events", "nutation_crossing": "propagation.events",
+    "event_table": "propagation.events", "propagate": "propagation.propagator",
+    "classify": "analysis.classification", "Classification": "analysis.classification",
+    "fit": "fitting", "sample_posterior": "fitting",
+    "AttitudeObservations": "fitting", "AngularVelocityObservations": "fitting",
+    "PeriodObservations": "fitting", "LightcurveObservations": "fitting",
+    "TLEOrbit": "environment", "IGRF": "environment", "SpinOrbit": "spinorbit",
+    "Geometry": "photometry", "Lightcurve": "photometry", "lightcurve": "photometry",
+    "fit_periods": "photometry", "PeriodFit": "photometry",
+    "read_lightcurve": "photometry",
+}
+
+#: Namespaces of the public API that are modules (``att.torques.GravityGradient``).
+_NAMESPACES = ("torques", "ensemble", "spindown")
 
 __all__ = [
     "__version__",
@@ -91,13 +90,23 @@ __all__ = [
     "fit_periods",
     "PeriodFit",
     "read_lightcurve",
-    *errors.__all__,          # every exception and warning
+    *_error_names,          # every exception and warning
 ]
 
 
 def __getattr__(name):
-    # att.splitting, att.aem, ...: the deprecated aliases of moved modules
-    old = f"{__name__}.{name}"
-    if old in MOVED_MODULES:
-        return sys.modules[old]
-    raise AttributeError(f"module 'attitude' has no attribute {name!r}")
+    owner = _OWNERS.get(name)
+    if owner is not None:
+        value = getattr(importlib.import_module(f"{__name__}.{owner}"), name)
+    elif name in _NAMESPACES:
+        value = importlib.import_module(f"{__name__}.{name}")
+    elif f"{__name__}.{name}" in MOVED_MODULES:   # att.splitting, att.aem, ...: warn on use
+        return sys.modules[f"{__name__}.{name}"]
+    else:
+        raise AttributeError(f"module 'attitude' has no attribute {name!r}")
+    globals()[name] = value       # later reads skip this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | set(_NAMESPACES))

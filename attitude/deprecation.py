@@ -35,17 +35,27 @@ MOVED_MODULES = {
     "attitude.splitting": "attitude.propagation.splitting",
     "attitude.integrate": "attitude.propagation.reference",
     "attitude.events": "attitude.propagation.events",
-    "attitude.propagation.elliptic": "attitude.elliptic",
+    "attitude.propagation.elliptic": "attitude.foundations.elliptic",
     "attitude.aem": "attitude.formats.aem",
     "attitude.spice": "attitude.formats.spice",
     "attitude.streaming": "attitude.formats.streaming",
+    # round three: the flat modules into the layers' folders (docs/architecture.md)
+    **{f"attitude.{old}": f"attitude.{layer}.{new}" for layer, names in {
+        "foundations": ("errors", "quantities", "quaternion", "elliptic", "spec"),
+        "model": ("body", "shape", "raycast", "surface", "state", "orbit", "population",
+                  "sampling", "tables", "freebody", "regimes", "ephemeris"),
+        "analysis": ("diagnostics", ("classify", "classification"), "lyapunov",
+                     "statistics"),
+        "app": ("scenario", "scenario_spec", "cli", "plot"),
+    }.items() for old, new in (n if isinstance(n, tuple) else (n, n) for n in names)},
+    "attitude.photometry.lightcurve": "attitude.photometry.dataset",
 }
 
 #: ``(old module, name)`` -> new module, for single names that moved: the old module's
 #: ``__getattr__`` calls :func:`moved_attribute`.
 MOVED_NAMES = {
-    ("attitude.propagation.splitting", "BodyBatch"): "attitude.body",
-    **{("attitude.propagation.torquefree", name): "attitude.freebody"
+    ("attitude.propagation.splitting", "BodyBatch"): "attitude.model.body",
+    **{("attitude.propagation.torquefree", name): "attitude.model.freebody"
        for name in ("Diagnosis", "diagnose", "diagnose_principal", "diagnose_many",
                     "branch_of")},
 }
@@ -63,7 +73,7 @@ def moved_attribute(module: str, name: str):
     ...     warnings.simplefilter("always")
     ...     cls = moved_attribute("attitude.propagation.splitting", "BodyBatch")
     >>> cls.__module__, str(caught[0].message).endswith("use attitude.body.BodyBatch")
-    ('attitude.body', True)
+    ('attitude.model.body', True)
     """
     new = MOVED_NAMES.get((module, name))
     if new is None:

@@ -4,13 +4,13 @@ The user's namespace for populations (``att.ensemble.regime_fractions(cloud)``,
 ``att.ensemble.local_cluster(2)``): it gathers what lives in the modules that own each
 idea, and nothing inside the package imports it.
 
-- :class:`~attitude.population.Ensemble`: the population container (arrays along
-  ``body``), built from arrays, bodies, tables (:mod:`attitude.tables`) or a Monte
-  Carlo draw (:mod:`attitude.sampling`, :data:`MODELS`);
+- :class:`~attitude.model.population.Ensemble`: the population container (arrays along
+  ``body``), built from arrays, bodies, tables (:mod:`attitude.model.tables`) or a Monte
+  Carlo draw (:mod:`attitude.model.sampling`, :data:`MODELS`);
 - :func:`propagate_ensemble` and the ``status`` values: the chunked, optionally dask,
   propagation engine (:mod:`attitude.propagation.batch`); :func:`local_cluster`
   (:mod:`attitude.propagation.cluster`);
-- the statistics of a population (:mod:`attitude.statistics`): :func:`diagnose_ensemble`,
+- the statistics of a population (:mod:`attitude.analysis.statistics`): :func:`diagnose_ensemble`,
   :func:`classify_ensemble`, :func:`regime_fractions`, :func:`period_quantiles`,
   :func:`attitude_spread`, :func:`spread_quantiles`.
 
@@ -29,12 +29,7 @@ Examples
 
 from __future__ import annotations
 
-from .errors import InvalidBodiesWarning
-from .population import Ensemble
-from .propagation.batch import STATUS_FAILED, STATUS_INVALID, STATUS_OK, propagate_ensemble
-from .propagation.cluster import local_cluster
-from .sampling import MODELS, spin_state, tumbling_state
-from .statistics import (
+from .analysis.statistics import (
     attitude_spread,
     classify_ensemble,
     diagnose_ensemble,
@@ -42,6 +37,11 @@ from .statistics import (
     regime_fractions,
     spread_quantiles,
 )
+from .foundations.errors import InvalidBodiesWarning
+from .model.population import Ensemble
+from .model.sampling import MODELS, spin_state, tumbling_state
+from .propagation.batch import STATUS_FAILED, STATUS_INVALID, STATUS_OK, propagate_ensemble
+from .propagation.cluster import local_cluster
 
 __all__ = [
     "Ensemble",

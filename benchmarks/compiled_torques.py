@@ -35,9 +35,9 @@ from attitude.environment import (
     SunPath,
     TLEOrbit,
 )
-from attitude.orbit import KeplerOrbit
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.torques import EARTH_MU, EddyCurrentDamping, GravityGradient, TiltedDipoleField
 from attitude.propagation.compiled_torques import NUMBA, body_torque, compile_torques
-from attitude.torques import EARTH_MU, EddyCurrentDamping, GravityGradient, TiltedDipoleField
 
 ISS = ("1 25544U 98067A   24061.50000000  .00016717  00000-0  10270-3 0  9005",
        "2 25544  51.6416 247.4627 0006703 130.5360 325.0288 15.72125391563537")

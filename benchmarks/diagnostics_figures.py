@@ -16,10 +16,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.classify import classify, lyapunov_exponent
-from attitude.diagnostics import add_diagnostics
-from attitude.orbit import KeplerOrbit
-from attitude.torques import EnergyDissipation, GravityGradient
+from attitude.analysis.classification import classify, lyapunov_exponent
+from attitude.analysis.diagnostics import add_diagnostics
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.torques import EnergyDissipation, GravityGradient
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
 COLORS = {"PA-long": "#4c72b0", "LAM": "#55a868", "separatrix": "#c44e52", "SAM": "#8172b2",

@@ -68,7 +68,6 @@ sys.path.insert(0, str(HERE.parent))
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
-from attitude.ephemeris import write_atomically  # noqa: E402
 from attitude.fitting import PARAMETERS, free_parameters  # noqa: E402
 from attitude.fitting.synthetic import (  # noqa: E402
     noisy_attitudes,
@@ -77,6 +76,7 @@ from attitude.fitting.synthetic import (  # noqa: E402
     random_state,
     synthetic_lightcurve,
 )
+from attitude.model.ephemeris import write_atomically  # noqa: E402
 
 BODY = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
 EPOCH = "2029-04-13T00:00:00"

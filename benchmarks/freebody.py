@@ -34,9 +34,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
-from attitude.body import as_bodies, to_principal_frame  # noqa: E402
+from attitude.model.body import as_bodies, to_principal_frame  # noqa: E402
+from attitude.model.state import stack_states  # noqa: E402
 from attitude.propagation.torquefree import free_rotation  # noqa: E402
-from attitude.state import stack_states  # noqa: E402
 
 
 def best_of(fn, repeat=5):

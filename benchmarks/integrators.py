@@ -40,7 +40,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
-from attitude.orbit import KeplerOrbit  # noqa: E402
+from attitude.model.orbit import KeplerOrbit  # noqa: E402
 from attitude.propagation.reference import integrate_reference as _reference  # noqa: E402
 
 
@@ -49,8 +49,8 @@ def integrate_reference(*args, **kwargs):
     splitting with scipy's integrator; the compiled DOP853 is measured by
     benchmarks/perturbed.py."""
     return _reference(*args, compiled=False, **kwargs)
+from attitude.model.torques import EARTH_MU, GravityGradient  # noqa: E402
 from attitude.propagation.splitting import choose_step, integrate_splitting  # noqa: E402
-from attitude.torques import EARTH_MU, GravityGradient  # noqa: E402
 
 SATURN_MU = 3.7931187e16          # m^3/s^2 (JPL)
 HYPERION_A = 1.481e9              # m

@@ -33,10 +33,10 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
-from attitude.orbit import KeplerOrbit  # noqa: E402
+from attitude.model.orbit import KeplerOrbit  # noqa: E402
+from attitude.model.torques import EnergyDissipation, GravityGradient  # noqa: E402
 from attitude.propagation.reference import integrate_reference  # noqa: E402
 from attitude.propagation.splitting import integrate_splitting  # noqa: E402
-from attitude.torques import EnergyDissipation, GravityGradient  # noqa: E402
 
 MU = 3.986004418e14
 BODY = att.RigidBody.from_principal_moments([1.0, 1.7, 2.2])

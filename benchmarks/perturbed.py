@@ -70,16 +70,16 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
 import attitude as att  # noqa: E402
-from attitude.ephemeris import write_atomically  # noqa: E402
-from attitude.orbit import KeplerOrbit  # noqa: E402
-from attitude.propagation.compiled import NUMBA  # noqa: E402
-from attitude.propagation.reference import _rhs, integrate_reference  # noqa: E402
-from attitude.torques import (  # noqa: E402
+from attitude.model.ephemeris import write_atomically  # noqa: E402
+from attitude.model.orbit import KeplerOrbit  # noqa: E402
+from attitude.model.torques import (  # noqa: E402
     EddyCurrentDamping,
     GravityGradient,
     TiltedDipoleField,
     UniformField,
 )
+from attitude.propagation.compiled import NUMBA  # noqa: E402
+from attitude.propagation.reference import _rhs, integrate_reference  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 WORKER = HERE / "_basilisk_worker.py"

@@ -29,10 +29,10 @@ from _machine import cpu_name  # noqa: E402
 from perturbed import attitude_error, best_of, quaternions  # noqa: E402  (same folder)
 
 import attitude as att  # noqa: E402
-from attitude.ephemeris import write_atomically  # noqa: E402
-from attitude.orbit import KeplerOrbit  # noqa: E402
+from attitude.model.ephemeris import write_atomically  # noqa: E402
+from attitude.model.orbit import KeplerOrbit  # noqa: E402
+from attitude.model.torques import EARTH_MU, GravityGradient  # noqa: E402
 from attitude.propagation.compiled import NUMBA  # noqa: E402
-from attitude.torques import EARTH_MU, GravityGradient  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 TARGET = 1e-6

@@ -32,7 +32,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 from _machine import cpu_name  # noqa: E402  (benchmarks/_machine.py)
 
-from attitude.freebody import branch_of  # noqa: E402
+from attitude.model.freebody import branch_of  # noqa: E402
 from attitude.propagation.torquefree import free_rotation  # noqa: E402
 
 

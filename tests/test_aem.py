@@ -25,9 +25,9 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import AttitudeWarning, EphemerisFormatError
 from attitude.formats import aem
 from attitude.formats.aem import AEM_WRITE_TYPES, convert, read_aem, write_aem
+from attitude.foundations.errors import AttitudeWarning, EphemerisFormatError
 
 from .aem_fixture import CASES, frozen_ephemeris
 from .tolerances import FEW_OPS, assert_agree

@@ -251,7 +251,7 @@ def test_explorer_1_cylinder_with_four_whip_antennas():
 
 def test_body_batch_moved_from_splitting_warns():
     """``BodyBatch`` moved to attitude.body (the batch normaliser); the old path warns."""
-    import attitude.body
+    import attitude.model.body
     import attitude.propagation.splitting as splitting
 
     with pytest.warns(DeprecationWarning, match="use attitude.body.BodyBatch"):

@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.classify import (
+from attitude.analysis.classification import (
     Classification,
     ClassificationError,
     LyapunovResult,
@@ -29,10 +29,10 @@ from attitude.classify import (
     initial_state,
     lyapunov_exponent,
 )
-from attitude.diagnostics import InsufficientDataError
-from attitude.freebody import diagnose_principal
-from attitude.orbit import KeplerOrbit
-from attitude.torques import ConstantTorque, EnergyDissipation, GravityGradient
+from attitude.analysis.diagnostics import InsufficientDataError
+from attitude.model.freebody import diagnose_principal
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.torques import ConstantTorque, EnergyDissipation, GravityGradient
 
 EPOCH = "2030-01-01T00:00:00"
 ROOT = Path(__file__).resolve().parents[1]
@@ -360,7 +360,7 @@ def test_apophis_scenario_is_sam_with_published_periods(tmp_path):
     """(99942) Apophis, Pravec et al. 2014: SAM, P_phi = 27.38 +/- 0.07 h,
     P_psi = 263 +/- 6 h (scenarios/apophis.toml, written by ``attitude run`` to a file
     of this test's own, read back)."""
-    from attitude.cli import main
+    from attitude.app.cli import main
 
     out = tmp_path / "apophis.nc"
     assert main(["run", str(ROOT / "scenarios" / "apophis.toml"), "-o", str(out),

@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from attitude import cli
-from attitude.scenario import load_scenario, run_scenario
+from attitude.app.scenario import load_scenario, run_scenario
 from tests.test_scenario import GOOD, write
 
 EXPECT = """

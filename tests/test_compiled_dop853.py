@@ -14,12 +14,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import InvalidStateError
-from attitude.orbit import KeplerOrbit
-from attitude.propagation import compiled
-from attitude.propagation.reference import integrate_reference, integrate_reference_batch
-from attitude.propagation.torquefree import free_rotation
-from attitude.torques import (
+from attitude.foundations.errors import InvalidStateError
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.torques import (
     ConstantTorque,
     EddyCurrentDamping,
     EnergyDissipation,
@@ -27,6 +24,9 @@ from attitude.torques import (
     GravityGradient,
     TiltedDipoleField,
 )
+from attitude.propagation import compiled
+from attitude.propagation.reference import integrate_reference, integrate_reference_batch
+from attitude.propagation.torquefree import free_rotation
 
 from .tolerances import EPS, INTEGRATOR_PATHS, assert_agree, attitude_angle
 

@@ -20,18 +20,18 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.orbit import KeplerOrbit
-from attitude.propagation import compiled_loop
-from attitude.propagation.reference import integrate_reference
-from attitude.propagation.splitting import choose_step, integrate_splitting
-from attitude.quaternion import canonical
-from attitude.torques import (
+from attitude.foundations.quaternion import canonical
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.torques import (
     ConstantTorque,
     EddyCurrentDamping,
     EnergyDissipation,
     GravityGradient,
     TiltedDipoleField,
 )
+from attitude.propagation import compiled_loop
+from attitude.propagation.reference import integrate_reference
+from attitude.propagation.splitting import choose_step, integrate_splitting
 
 from .tolerances import SPLITTING_STEP, assert_agree, attitude_angle
 
@@ -166,7 +166,7 @@ def test_without_numba_the_same_loop_runs_as_python():
         import attitude as att
         from attitude.propagation import compiled_loop
         from attitude.propagation.splitting import integrate_splitting
-        from attitude.torques import GravityGradient
+        from attitude.model.torques import GravityGradient
         assert not compiled_loop.NUMBA
         gg = GravityGradient(3.986004418e14, [7.0e6, 0.0, 0.0])
         args = ([1.0, 2.0, 3.0], [0, 0, 0, 1], [1e-3, 2e-3, 3e-3], [0.0, 95.0, 300.0])
@@ -217,7 +217,7 @@ def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
 def test_rtol_with_the_splitting_method_in_a_scenario(tmp_path):
     """[propagation] method = "splitting" with rtol: the run is the splitting's error-
     controlled one (the same numbers as att.propagate with those keywords)."""
-    from attitude.scenario import load_scenario, run_scenario
+    from attitude.app.scenario import load_scenario, run_scenario
 
     path = tmp_path / "gg.toml"
     path.write_text(textwrap.dedent("""

@@ -37,10 +37,9 @@ from attitude.environment import (
     TLEOrbit,
     illumination,
 )
-from attitude.errors import InvalidStateError, OrbitError, TorqueConfigError
-from attitude.orbit import CallablePath, KeplerOrbit, TabulatedPath
-from attitude.propagation import compiled_torques as ct
-from attitude.torques import (
+from attitude.foundations.errors import InvalidStateError, OrbitError, TorqueConfigError
+from attitude.model.orbit import CallablePath, KeplerOrbit, TabulatedPath
+from attitude.model.torques import (
     EARTH_MU,
     EARTH_ROTATION_RATE,
     ConstantTorque,
@@ -53,6 +52,7 @@ from attitude.torques import (
     TorqueModel,
     UniformField,
 )
+from attitude.propagation import compiled_torques as ct
 from tests.tolerances import TORQUE_EVAL, assert_agree
 
 #: A satellite with a full inertia tensor (kg m^2) and a mass (kg).

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude import freebody as fb
-from attitude.diagnostics import (
+from attitude.analysis.diagnostics import (
     DIAGNOSTIC_VARIABLES,
     DiagnosticsError,
     InsufficientDataError,
@@ -26,8 +26,8 @@ from attitude.diagnostics import (
     osculating_polhode_period,
     principal_series,
 )
+from attitude.model.torques import EnergyDissipation
 from attitude.propagation import torquefree as tf
-from attitude.torques import EnergyDissipation
 
 from .tolerances import EXACT_SOLUTION, FEW_OPS, assert_agree
 

@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude import ensemble as en
-from attitude.freebody import diagnose, diagnose_many, diagnose_principal
+from attitude.model.freebody import diagnose, diagnose_many, diagnose_principal
 from attitude.propagation.reference import DEFAULT_RTOL
 
 from .tolerances import (
@@ -440,7 +440,7 @@ def test_attitude_spread_against_scipy_rotations():
 
 
 def test_diagnostics_of_an_ensemble_with_an_invalid_body():
-    from attitude.diagnostics import add_diagnostics
+    from attitude.analysis.diagnostics import add_diagnostics
 
     with pytest.warns(en.InvalidBodiesWarning):
         ens = att.Ensemble.from_arrays(principal_moments=[[1, 2, 2.5], [1, 1, 3], [2, 2.5, 4]],
@@ -490,7 +490,7 @@ def test_isotropic_direction_error_is_the_same_at_the_pole(dec):
 def test_masses_travel_with_the_bodies_for_torques_that_need_them():
     """The heavy top takes its mass from the body: chunked (ensemble) and direct batch
     propagation agree, and the ensemble keeps the masses."""
-    from attitude.torques import HeavyTopPivot
+    from attitude.model.torques import HeavyTopPivot
 
     bodies = [att.RigidBody.from_principal_moments([1.0, 1.0, 0.5], mass=2.0),
               att.RigidBody.from_principal_moments([1.0, 1.0, 0.6], mass=3.0)]

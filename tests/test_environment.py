@@ -15,7 +15,7 @@ from astropy import units as u
 from astropy.coordinates import GCRS, ITRS, CartesianRepresentation, get_body
 from astropy.time import Time, TimeDelta
 
-from attitude.errors import OrbitError
+from attitude.foundations.errors import OrbitError
 
 sgp4 = pytest.importorskip("sgp4")
 ppigrf = pytest.importorskip("ppigrf")
@@ -107,8 +107,8 @@ def test_igrf_along_a_tle_orbit_matches_ppigrf_to_one_nanotesla():
 
 
 def test_igrf_degree_one_is_close_to_the_tilted_dipole():
-    from attitude.orbit import KeplerOrbit
-    from attitude.torques import TiltedDipoleField
+    from attitude.model.orbit import KeplerOrbit
+    from attitude.model.torques import TiltedDipoleField
     epoch = Time("2024-03-01T00:00:00", scale="utc")
     leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6871 km", i="51.6 deg")
     dipole = IGRF(leo, epoch=epoch, max_degree=1)
@@ -122,7 +122,7 @@ def test_igrf_degree_one_is_close_to_the_tilted_dipole():
 
 
 def test_igrf_outside_its_span_is_an_error():
-    from attitude.orbit import KeplerOrbit
+    from attitude.model.orbit import KeplerOrbit
     leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6871 km")
     field = IGRF(leo, epoch=Time("2031-01-01", scale="utc"))
     with pytest.raises(OrbitError, match="outside IGRF-14"):
@@ -191,7 +191,7 @@ def test_eddy_current_spin_down_in_igrf_follows_the_averaged_closed_form():
     from scipy.spatial.transform import Rotation
 
     import attitude as att
-    from attitude.torques import EddyCurrentDamping
+    from attitude.model.torques import EddyCurrentDamping
 
     orbit = TLEOrbit(*ISS)
     field = IGRF(orbit)
@@ -221,9 +221,9 @@ def test_scenario_keys_tle_orbit_and_igrf_field(tmp_path, capsys):
     """`orbit = { tle = [...] }` and `field = "igrf"` in a [[torques]] table: the run
     builds a TLEOrbit and an IGRF field (the same eddy-current torque as from Python), and
     a corrupted element set exits 2 naming the key."""
-    from attitude.cli import main
-    from attitude.scenario import load_scenario
-    from attitude.torques import EddyCurrentDamping
+    from attitude.app.cli import main
+    from attitude.app.scenario import load_scenario
+    from attitude.model.torques import EddyCurrentDamping
     path = Path(__file__).parent / "data" / "igrf_tle_despin.toml"
     sc = load_scenario(path)
     torque = sc.torques[0]

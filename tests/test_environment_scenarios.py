@@ -20,7 +20,8 @@ from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
 from astropy.time import Time, TimeDelta
 
 import attitude as att
-from attitude.cli import main
+from attitude.app.cli import main
+from attitude.app.scenario import load_scenario
 from attitude.environment import (
     AerodynamicDrag,
     ExponentialAtmosphere,
@@ -29,9 +30,8 @@ from attitude.environment import (
     SolarRadiationPressure,
     SunPath,
 )
-from attitude.quaternion import rotate
-from attitude.scenario import load_scenario
-from attitude.torques import EARTH_MU
+from attitude.foundations.quaternion import rotate
+from attitude.model.torques import EARTH_MU
 
 from .tolerances import SPLITTING_STEP, TORQUE_EVAL, assert_agree, ulps
 

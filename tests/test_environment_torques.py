@@ -19,8 +19,8 @@ from attitude.environment import (
     SolarRadiationPressure,
     TLEOrbit,
 )
-from attitude.errors import ShapeModelError, TorqueConfigError
-from attitude.surface import OpticalProperties, Surface
+from attitude.foundations.errors import ShapeModelError, TorqueConfigError
+from attitude.model.surface import OpticalProperties, Surface
 
 pytest.importorskip("sgp4")
 

@@ -9,7 +9,7 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.ephemeris import AtomicFiles, write_atomically
+from attitude.model.ephemeris import AtomicFiles, write_atomically
 from attitude.propagation.reference import DEFAULT_RTOL
 
 from .tolerances import EPS, INTEGRATOR_PATHS, assert_agree

@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import AttitudeError, InvalidStateError, PropagationError
+from attitude.foundations.errors import AttitudeError, InvalidStateError, PropagationError
 from attitude.propagation.events import Event, event_table, nutation_crossing
 
 from .tolerances import FEW_OPS, assert_agree

@@ -12,7 +12,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import AttitudeError
 from attitude.fitting import PARAMETERS, free_parameters
 from attitude.fitting.synthetic import (
     noisy_attitudes,
@@ -21,6 +20,7 @@ from attitude.fitting.synthetic import (
     random_state,
     synthetic_lightcurve,
 )
+from attitude.foundations.errors import AttitudeError
 
 BODY = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
 EPOCH = "2029-04-13T00:00:00"
@@ -121,7 +121,7 @@ def test_apophis_periods_give_back_its_energy_ratio():
     """scenarios/apophis.toml (Pravec et al. 2014): its body and state reproduce its
     published periods; fitted to those periods (P_phi = 27.38 +- 0.07 h, P_psi = 263 +-
     6 h) with the moment ratios fixed, E/E0 and P_phi come back within their sigmas."""
-    from attitude.scenario import load_scenario
+    from attitude.app.scenario import load_scenario
     sc = load_scenario("scenarios/apophis.toml")
     d = att.diagnose(sc.body, sc.state)
     assert d.periods["precession"] / 3600 == pytest.approx(27.38, rel=0.01)
@@ -203,7 +203,7 @@ def test_apophis_from_its_own_syntheticsynthetic_lightcurve():
     """scenarios/apophis.toml (Pravec et al. 2014), its homogeneous ellipsoid, 600
     magnitudes (0.01 mag) over 20 days at 20 deg phase: E/E0, A/C and B/C come back
     within 3 sigma, and the uncertainty of E/E0 is below the published 0.013."""
-    from attitude.scenario import load_scenario
+    from attitude.app.scenario import load_scenario
     sc = load_scenario("scenarios/apophis.toml")
     shape = att.Polyhedron.ellipsoid_from_moments(sc.body.principal_moments, subdivisions=2)
     geom = att.Geometry(sun=[1.0, 0.0, 0.0], observer=[np.cos(0.35), np.sin(0.35), 0.1])
@@ -255,8 +255,8 @@ def test_attitude_fit_cli_end_to_end(tmp_path, capsys):
     """scenarios/tumbler_fit.toml: its first guess fitted to its CSV of quaternions; the
     fitted scenario loads, and holds the moment ratios the data were made with (A/C =
     0.6, B/C = 0.9) within 4 sigma of the printed uncertainties."""
-    from attitude.cli import main
-    from attitude.scenario import load_scenario
+    from attitude.app.cli import main
+    from attitude.app.scenario import load_scenario
     out = tmp_path / "fitted.toml"
     assert main(["fit", "scenarios/tumbler_fit.toml", "-o", str(out), "--plot"]) == 0
     assert (tmp_path / "fitted_residuals.png").stat().st_size > 1000
@@ -271,7 +271,7 @@ def test_attitude_fit_cli_end_to_end(tmp_path, capsys):
 
 
 def test_attitude_fit_bad_observations_exit_2(tmp_path, capsys):
-    from attitude.cli import main
+    from attitude.app.cli import main
     (tmp_path / "q.csv").write_text("t,qx,qy,qz\n0,0,0,0\n")
     text = open("scenarios/tumbler_fit.toml").read().replace(
         "data/tumbler_quaternions.csv", "q.csv")

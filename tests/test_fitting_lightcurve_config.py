@@ -17,11 +17,11 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import ScenarioError
+from attitude.app.scenario import load_scenario
 from attitude.fitting import PARAMETERS, free_parameters
 from attitude.fitting.observations import seconds_since
+from attitude.foundations.errors import ScenarioError
 from attitude.photometry.geometry import AU, SPEED_OF_LIGHT
-from attitude.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "nea_lightcurve_fit.toml"
@@ -115,7 +115,7 @@ def _wrap(d, name):
 
 
 def test_attitude_fit_recovers_the_state_and_the_zero_points(tmp_path, capsys):
-    from attitude.cli import main
+    from attitude.app.cli import main
     out = tmp_path / "fitted.toml"
     start = time.process_time()
     assert main(["fit", str(SCENARIO), "-o", str(out)]) == 0
@@ -173,7 +173,7 @@ def test_bad_lightcurve_tables_name_the_key(tmp_path, capsys, old, new, key):
     with pytest.raises(ScenarioError) as err:
         load_scenario(path)
     assert err.value.key.startswith(key), (err.value.key, str(err.value))
-    from attitude.cli import main
+    from attitude.app.cli import main
     assert main(["fit", str(path)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and key in lines[0], lines

@@ -8,13 +8,13 @@ from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 import attitude as att
-from attitude.errors import AttitudeError
 from attitude.fitting import free_parameters
 from attitude.fitting.synthetic import (
     noisy_attitudes,
     parameter_differences,
     random_state,
 )
+from attitude.foundations.errors import AttitudeError
 
 BODY = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
 

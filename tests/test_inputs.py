@@ -1,7 +1,7 @@
 """Every bad input gets exit 2 and one line naming the file and the key (issue 14 item 2).
 
 The mutations are generated from the declaration of the format
-(:data:`attitude.scenario_spec.SCENARIO`): for every key of every table that the base
+(:data:`attitude.app.scenario_spec.SCENARIO`): for every key of every table that the base
 scenarios below use, each kind of bad value the key's declaration rules out (wrong type,
 wrong length, empty, NaN/inf, non-positive, a date that does not exist, a unit of the wrong
 dimension), plus the examples of the issue.  Each runs ``attitude run`` in-process and
@@ -22,10 +22,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from attitude.cli import main
-from attitude.quantities import to_si
-from attitude.scenario import load_scenario
-from attitude.scenario_spec import SCENARIO
+from attitude.app.cli import main
+from attitude.app.scenario import load_scenario
+from attitude.app.scenario_spec import SCENARIO
+from attitude.foundations.quantities import to_si
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = sorted((ROOT / "scenarios").glob("*.toml"))
@@ -444,7 +444,7 @@ def test_nan_rows_of_a_table_are_invalid_bodies_not_errors(tmp_path):
 
 def test_a_bug_is_one_line_and_exit_3_with_the_traceback_on_request(tmp_path, capsys,
                                                                     monkeypatch):
-    import attitude.cli as cli
+    import attitude.app.cli as cli
 
     def boom(*args, **kwargs):
         raise ZeroDivisionError("float division by zero")

@@ -24,18 +24,18 @@ from scipy.spatial.transform import Rotation
 from scipy.special import ellipk
 
 import attitude as att
+from attitude.app.scenario import load_scenario, run_scenario
 from attitude.environment import IGRF
-from attitude.errors import TorqueConfigError
-from attitude.orbit import KeplerOrbit
-from attitude.propagation import compiled_torques as ct
-from attitude.scenario import load_scenario, run_scenario
-from attitude.torques import (
+from attitude.foundations.errors import TorqueConfigError
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.torques import (
     EARTH_MU,
     MagneticDipole,
     TiltedDipoleField,
     UniformField,
     from_config,
 )
+from attitude.propagation import compiled_torques as ct
 from tests.test_scenario import GOOD, write
 from tests.tolerances import FEW_OPS, TORQUE_EVAL, assert_agree, attitude_angle
 

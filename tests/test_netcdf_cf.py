@@ -29,7 +29,7 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.ephemeris import TIME_CALENDAR, time_attributes, time_from_file
+from attitude.model.ephemeris import TIME_CALENDAR, time_attributes, time_from_file
 
 DATA = Path(__file__).parent / "data"
 

@@ -8,7 +8,7 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from attitude.orbit import (
+from attitude.model.orbit import (
     CallablePath,
     ConstantPosition,
     KeplerOrbit,

@@ -86,7 +86,7 @@ def test_pyproject_names_the_distribution_and_the_licence():
     # PEP 639: no licence classifier next to an SPDX expression
     assert not any(c.startswith("License ::") for c in project.get("classifiers", []))
     # the package and the command keep the name attitude
-    assert project["scripts"] == {"attitude": "attitude.cli:main"}
+    assert project["scripts"] == {"attitude": "attitude.app.cli:main"}
     assert PYPROJECT["tool"]["setuptools"]["packages"]["find"]["include"] == ["attitude*"]
 
 
@@ -130,7 +130,7 @@ def test_installed_metadata():
     assert dist.metadata["License-Expression"] == "BSD-3-Clause"
     assert "LICENSE" in (dist.metadata.get_all("License-File") or [])
     scripts = {ep.name: ep.value for ep in dist.entry_points if ep.group == "console_scripts"}
-    assert scripts == {"attitude": "attitude.cli:main"}
+    assert scripts == {"attitude": "attitude.app.cli:main"}
 
 
 @pytest.mark.parametrize(("platform", "machine", "python", "installed"), [

@@ -10,8 +10,8 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import PhotometryError, ShapeModelError
-from attitude.orbit import KeplerOrbit
+from attitude.foundations.errors import PhotometryError, ShapeModelError
+from attitude.model.orbit import KeplerOrbit
 from attitude.photometry import (
     AshikhminShirley,
     FacetMaterials,
@@ -264,7 +264,7 @@ def test_shadows_without_embree_name_the_extra(monkeypatch):
 def test_surface_properties_drive_the_brdf():
     """A surface of rho_s = 0 and rho_d = A under Phong is a Lambert surface of albedo A;
     bad fractions are refused."""
-    from attitude.surface import OpticalProperties, Surface
+    from attitude.model.surface import OpticalProperties, Surface
 
     shape = att.Polyhedron.ellipsoid(2.0, 1.0, 1.0, subdivisions=2)
     surf = Surface(shape, (OpticalProperties(0.0, 0.3), OpticalProperties(0.0, 0.5)),

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from attitude.cli import main
+from attitude.app.cli import main
 
 SCENARIO = """
 [scenario]

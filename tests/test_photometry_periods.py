@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import attitude as att
-from attitude.errors import PhotometryError
+from attitude.app.scenario import load_scenario
+from attitude.foundations.errors import PhotometryError
 from attitude.photometry import Geometry, lightcurve
 from attitude.photometry.config import run_lightcurve
 from attitude.photometry.periods import fit_periods, fourier_terms, lattice_combination
-from attitude.scenario import load_scenario
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from attitude.errors import LightcurveFormatError
+from attitude.foundations.errors import LightcurveFormatError
 from attitude.photometry import fit_periods, read_lightcurve
 from attitude.photometry.readers import read_alcdef
 

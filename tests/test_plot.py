@@ -1,4 +1,4 @@
-"""attitude.plot: every figure renders to a non-trivial PNG; ``attitude run --plot``."""
+"""attitude.app.plot: every figure renders to a non-trivial PNG; ``attitude run --plot``."""
 
 import numpy as np
 import pytest
@@ -10,7 +10,7 @@ mpl = pytest.importorskip("matplotlib")
 from matplotlib.image import imread  # noqa: E402
 
 from attitude import plot  # noqa: E402
-from attitude.torques import from_config  # noqa: E402
+from attitude.model.torques import from_config  # noqa: E402
 from tests.test_cli import attitude  # noqa: E402
 from tests.test_scenario import GOOD, write  # noqa: E402
 
@@ -70,7 +70,7 @@ def test_run_plot_without_matplotlib_exits_2(tmp_path):
     import sys
 
     path = write(tmp_path, GOOD)
-    code = ("import sys; sys.modules['matplotlib'] = None; from attitude.cli import main; "
+    code = ("import sys; sys.modules['matplotlib'] = None; from attitude.app.cli import main; "
             f"sys.exit(main(['run', {str(path)!r}, '--plot']))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 2

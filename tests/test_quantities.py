@@ -15,10 +15,10 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.errors import QuantityError, ScenarioError, TorqueConfigError
-from attitude.quantities import read_unit, to_si, to_time
-from attitude.scenario import load_scenario
-from attitude.torques import from_config
+from attitude.app.scenario import load_scenario
+from attitude.foundations.errors import QuantityError, ScenarioError, TorqueConfigError
+from attitude.foundations.quantities import read_unit, to_si, to_time
+from attitude.model.torques import from_config
 from tests.test_scenario import GOOD, write
 
 TWO_PI = 2 * math.pi

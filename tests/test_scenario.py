@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import attitude as att
-from attitude.scenario import load_scenario, run_scenario
+from attitude.app.scenario import load_scenario, run_scenario
 
 GOOD = """
 [scenario]

@@ -12,8 +12,8 @@ import pytest
 
 import attitude as att
 from attitude import ensemble as en
-from attitude.freebody import diagnose
-from attitude.scenario import load_scenario, run_scenario
+from attitude.app.scenario import load_scenario, run_scenario
+from attitude.model.freebody import diagnose
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from attitude.cli import _check_one, _check_targets
-from attitude.scenario import load_scenario
+from attitude.app.cli import _check_one, _check_targets
+from attitude.app.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 LONG = sorted((ROOT / "scenarios" / "long").glob("*.toml"))

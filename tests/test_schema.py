@@ -8,22 +8,22 @@ from pathlib import Path
 
 import pytest
 
-from attitude.photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
-from attitude.regimes import PERIOD_KEYS, REGIMES
-from attitude.scenario import (
+from attitude.app.scenario import (
     CONSERVATION_KEYS,
     EXPECT_KEYS,
     SCHEMA,
     scenario_reference,
     scenario_schema,
 )
-from attitude.scenario_spec import SPIN_EXPECT_KEYS
+from attitude.app.scenario_spec import SPIN_EXPECT_KEYS
+from attitude.model.regimes import PERIOD_KEYS, REGIMES
+from attitude.photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
 from tests.test_scenario import GOOD
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA_PATH = ROOT / "docs" / "scenario.schema.json"
 SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
-REFERENCE_START = "<!-- BEGIN GENERATED: python -m attitude.scenario --reference -->"
+REFERENCE_START = "<!-- BEGIN GENERATED: python -m attitude.app.scenario --reference -->"
 REFERENCE_END = "<!-- END GENERATED -->"
 
 
@@ -32,13 +32,13 @@ def _schema():
 
 
 def test_committed_schema_is_the_generated_one():
-    """Regenerate with: python -m attitude.scenario --schema > docs/scenario.schema.json"""
+    """Regenerate with: python -m attitude.app.scenario --schema > docs/scenario.schema.json"""
     assert _schema() == scenario_schema()
 
 
 def test_reference_in_the_docs_is_the_generated_one():
     """Regenerate the section between the markers of docs/scenarios.md with
-    python -m attitude.scenario --reference"""
+    python -m attitude.app.scenario --reference"""
     text = (ROOT / "docs" / "scenarios.md").read_text()
     start = text.index(REFERENCE_START) + len(REFERENCE_START)
     end = text.index(REFERENCE_END)

@@ -16,8 +16,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from attitude.errors import InvalidInertiaError, ShapeModelError
-from attitude.shape import Polyhedron
+from attitude.foundations.errors import InvalidInertiaError, ShapeModelError
+from attitude.model.shape import Polyhedron
 
 # ----------------------------------------------------------------------------- meshes
 # Unit cube [0, 1]^3, two counter-clockwise (outward) triangles per side.

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import attitude as att
-from attitude.errors import ShapeModelError
+from attitude.foundations.errors import ShapeModelError
 
 
 def test_ellipsoid_volume_converges_quadratically():

@@ -3,7 +3,7 @@ section, despinning, the [section] table and ``attitude section``.
 
 Independent references: the tabulated Cayley series (Murray & Dermott 1999, Table 5.1) and
 Parseval's identity for the numerical transform; the gravity-gradient torque of
-``attitude.torques`` for the planar equation; the linear forced-libration theory for the
+``attitude.model.torques`` for the planar equation; the linear forced-libration theory for the
 3-D propagation; Floquet theory (area preservation, reciprocal pairs); the published
 libration anchors (shared/validation/README.md); the chaos verdict of ``lyapunov.py`` on
 the 3-D problem for the planar batch verdict.
@@ -20,10 +20,11 @@ import pytest
 import xarray as xr
 
 import attitude as att
-from attitude.cli import main
-from attitude.errors import ScenarioError, SpinOrbitError
-from attitude.lyapunov import lyapunov_exponent
-from attitude.scenario import load_scenario
+from attitude.analysis.lyapunov import lyapunov_exponent
+from attitude.app.cli import main
+from attitude.app.scenario import load_scenario
+from attitude.foundations.errors import ScenarioError, SpinOrbitError
+from attitude.model.torques import GravityGradient
 from attitude.spinorbit import (
     cayley_coefficient,
     cayley_series,
@@ -44,7 +45,6 @@ from attitude.spinorbit.section import (
     parse_expect,
     parse_section,
 )
-from attitude.torques import GravityGradient
 
 ROOT = Path(__file__).resolve().parents[1]
 MARS_MU = 4.282837e13

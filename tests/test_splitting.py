@@ -11,7 +11,13 @@ from astropy import units as u
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.orbit import ConstantPosition, KeplerOrbit
+from attitude.model.orbit import ConstantPosition, KeplerOrbit
+from attitude.model.torques import (
+    ConstantTorque,
+    EnergyDissipation,
+    GravityGradient,
+    as_torque_model,
+)
 from attitude.propagation import splitting
 from attitude.propagation.reference import integrate_reference
 from attitude.propagation.splitting import (
@@ -22,12 +28,6 @@ from attitude.propagation.splitting import (
     integrate_splitting,
 )
 from attitude.propagation.torquefree import free_rotation
-from attitude.torques import (
-    ConstantTorque,
-    EnergyDissipation,
-    GravityGradient,
-    as_torque_model,
-)
 
 from .tolerances import EXACT_SOLUTION, SPLITTING_STEP, assert_agree, ulps
 

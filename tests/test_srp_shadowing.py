@@ -13,15 +13,15 @@ import numpy as np
 import pytest
 
 import attitude as att
-from attitude.cli import main
+from attitude.app.cli import main
+from attitude.app.scenario import load_scenario
 from attitude.environment import Facets, SolarRadiationPressure
 from attitude.environment.facets import rectangle, triangle_areas
 from attitude.environment.radiation import AUTO_MAX_SUBDIVISION, AUTO_SPACING
-from attitude.errors import MissingDependencyError, TorqueConfigError
+from attitude.foundations.errors import MissingDependencyError, TorqueConfigError
+from attitude.foundations.quaternion import rotate
+from attitude.model.surface import OpticalProperties
 from attitude.propagation.compiled_torques import compile_torques
-from attitude.quaternion import rotate
-from attitude.scenario import load_scenario
-from attitude.surface import OpticalProperties
 
 from .tolerances import FEW_OPS, TORQUE_EVAL, assert_agree
 

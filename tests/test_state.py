@@ -81,8 +81,8 @@ def test_from_spin_axis_points_the_axis_and_matches_the_scenario_and_sampling_pa
     AttitudeState.from_spin_axis, scenario.spin_axis_state and the "spin" sampling
     model: the axis points to (ra, dec), the rate is about it, all three agree to a few
     ulps of the unit vectors (8 eps) and of the rate (1e-3 * eps)."""
-    from attitude.sampling import spin_state
-    from attitude.scenario import spin_axis_state
+    from attitude.app.scenario import spin_axis_state
+    from attitude.model.sampling import spin_state
 
     body = RigidBody.from_principal_moments([1.0, 2.0, 3.0])
     ra, dec, rate = np.radians(250.0), np.radians(-75.0), 1e-3

@@ -21,8 +21,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from attitude.errors import InvalidInertiaError, InvalidStateError
-from attitude.freebody import branch_of
+from attitude.foundations.errors import InvalidInertiaError, InvalidStateError
+from attitude.model.freebody import branch_of
 from attitude.propagation.torquefree import (
     PURE_SPIN_TOL,
     RTOL_AXISYMMETRIC,

@@ -20,10 +20,10 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from attitude.errors import NearSeparatrixWarning
-from attitude.freebody import diagnose, diagnose_principal
+from attitude.foundations.errors import NearSeparatrixWarning
+from attitude.model.freebody import diagnose, diagnose_principal
+from attitude.model.regimes import PERIOD_KEYS, REGIMES
 from attitude.propagation.torquefree import free_rotation
-from attitude.regimes import PERIOD_KEYS, REGIMES
 
 from . import oracle as O
 
@@ -277,7 +277,7 @@ def test_diagnosis_moved_to_freebody_old_paths_warn():
     import importlib
 
     import attitude
-    import attitude.freebody as fb
+    import attitude.model.freebody as fb
     import attitude.propagation.torquefree as tf
 
     for name in ("diagnose", "diagnose_principal", "diagnose_many", "branch_of",
@@ -287,4 +287,4 @@ def test_diagnosis_moved_to_freebody_old_paths_warn():
     assert attitude.diagnose is fb.diagnose
     old = importlib.import_module("attitude.propagation.elliptic")
     with pytest.warns(DeprecationWarning, match="use attitude.elliptic.cel"):
-        assert old.cel is importlib.import_module("attitude.elliptic").cel
+        assert old.cel is importlib.import_module("attitude.foundations.elliptic").cel

@@ -18,10 +18,8 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.orbit import ConstantPosition, KeplerOrbit, TabulatedPath
-from attitude.propagation.reference import integrate_reference
-from attitude.propagation.splitting import integrate_splitting
-from attitude.torques import (
+from attitude.model.orbit import ConstantPosition, KeplerOrbit, TabulatedPath
+from attitude.model.torques import (
     ConstantTorque,
     EddyCurrentDamping,
     EnergyDissipation,
@@ -37,6 +35,8 @@ from attitude.torques import (
     damping_timescale,
     from_config,
 )
+from attitude.propagation.reference import integrate_reference
+from attitude.propagation.splitting import integrate_splitting
 
 from .tolerances import TORQUE_EVAL, assert_agree
 

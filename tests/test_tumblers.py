@@ -19,11 +19,11 @@ import pytest
 from scipy import stats
 
 import attitude as att
-from attitude.cli import main
-from attitude.errors import DiagnosticsError, InsufficientDataError, ScenarioError
-from attitude.scenario import load_scenario, run_scenario
-from attitude.spindown import fit_spin_trend, spin_period_series, spin_trend
-from attitude.torques import EddyCurrentDamping, UniformField
+from attitude.analysis.spindown import fit_spin_trend, spin_period_series, spin_trend
+from attitude.app.cli import main
+from attitude.app.scenario import load_scenario, run_scenario
+from attitude.foundations.errors import DiagnosticsError, InsufficientDataError, ScenarioError
+from attitude.model.torques import EddyCurrentDamping, UniformField
 from tests.tolerances import EPS
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -19,7 +19,9 @@ from scipy.spatial.transform import Rotation
 
 from attitude import freebody as fb
 from attitude import quaternion as quat
-from attitude.body import (
+from attitude.analysis.diagnostics import invariants, osculating_polhode_period
+from attitude.foundations.errors import InvalidInertiaError, NearSeparatrixWarning
+from attitude.model.body import (
     SYMMETRIC_TENSOR_RTOL,
     RigidBody,
     as_bodies,
@@ -28,13 +30,11 @@ from attitude.body import (
     to_body_frame,
     to_principal_frame,
 )
-from attitude.diagnostics import invariants, osculating_polhode_period
-from attitude.errors import InvalidInertiaError, NearSeparatrixWarning
-from attitude.freebody import diagnose_many, diagnose_principal
-from attitude.population import Ensemble
+from attitude.model.freebody import diagnose_many, diagnose_principal
+from attitude.model.population import Ensemble
+from attitude.model.torques import ConstantTorque
 from attitude.propagation.splitting import free_flow, integrate_splitting
 from attitude.propagation.torquefree import free_rotation
-from attitude.torques import ConstantTorque
 
 EPS = np.finfo(float).eps
 N = 64

@@ -7,7 +7,7 @@ before a propagation calls it at every step.
 - :class:`TLEOrbit` -- a two-line element set through SGP4, in the run's inertial frame;
 - :class:`IGRF` -- the International Geomagnetic Reference Field (IGRF-14, through
   ``ppigrf``) along an orbit, inertial components, a drop-in for
-  :class:`attitude.torques.TiltedDipoleField`;
+  :class:`attitude.model.torques.TiltedDipoleField`;
 - :class:`SunPath` and :func:`illumination` -- where the Sun is and how much of its disk the
   Earth hides (cylindrical or conical shadow, with the penumbra);
 - :class:`SolarRadiationPressure` and :class:`AerodynamicDrag` -- torques of sunlight
@@ -20,8 +20,8 @@ The packages ``sgp4`` and ``ppigrf`` come with the ``environment`` extra
 (``pip install "attitude-dynamics[environment]"``).
 """
 
-from .. import torques as _torques
-from ..errors import OrbitError
+from ..foundations.errors import OrbitError
+from ..model import torques as _torques
 from .drag import VALLADO_EXPONENTIAL_TABLE, AerodynamicDrag, ExponentialAtmosphere
 from .facets import Facets
 from .frames import EARTH_FRAMES, inertial_to_earth_fixed, teme_to_inertial

@@ -2,7 +2,7 @@
 ``"drag"``.
 
 Both act on the spacecraft's outer surface, given in the torque table in one of two ways
-(the same description photometry uses, :mod:`attitude.surface`):
+(the same description photometry uses, :mod:`attitude.model.surface`):
 
 - ``facets = [ { type = "box", size = [...] }, { type = "plate", area = ..., normal =
   [...], center = [...] }, { type = "facet", ... } ]``: boxes, thin plates (two faces
@@ -15,18 +15,18 @@ Optical properties are named once, ``materials = { mli = { specular = 0.0, diffu
 0.2 } }``, and referred to by name (``material = "mli"`` on a facet, or as the default of
 the whole table); ``specular`` and ``diffuse`` can also be given on a facet directly.
 Torques are taken about ``center_of_mass`` (default: the body's centre of mass, in the
-coordinates of the facets).  The builders get a :class:`attitude.torques.BuildContext`
+coordinates of the facets).  The builders get a :class:`attitude.model.torques.BuildContext`
 (epoch, frame, scenario folder, body): the orbit tables and the Sun's path are shared
 between the torques of one scenario.
 
 The tables are declared here (:data:`TORQUE_TABLES`) and registered with
-:func:`attitude.torques.register_torque_type`; :mod:`attitude.scenario_spec` adds them
+:func:`attitude.model.torques.register_torque_type`; :mod:`attitude.app.scenario_spec` adds them
 to the scenario format.
 
 Examples
 --------
 >>> from astropy.time import Time
->>> from attitude.torques import BuildContext, from_config
+>>> from attitude.model.torques import BuildContext, from_config
 >>> ctx = BuildContext(epoch=Time("2016-10-01T00:00:00", scale="utc"), frame="GCRF")
 >>> srp = from_config({"type": "solar_radiation", "orbit": {"a": "7714 km", "i": "66 deg"},
 ...                    "facets": [{"type": "box", "size": [1.0, 2.0, 3.0]}]}, context=ctx)
@@ -40,11 +40,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import AttitudeError, TorqueConfigError
-from ..shape import Polyhedron
-from ..spec import Key, Table
-from ..surface import OpticalProperties, Surface
-from ..torques import EARTH_MU, ORBIT_TABLE, BuildContext, register_torque_type
+from ..foundations.errors import AttitudeError, TorqueConfigError
+from ..foundations.spec import Key, Table
+from ..model.shape import Polyhedron
+from ..model.surface import OpticalProperties, Surface
+from ..model.torques import EARTH_MU, ORBIT_TABLE, BuildContext, register_torque_type
 from .drag import AerodynamicDrag, ExponentialAtmosphere
 from .facets import Facets
 from .frames import check_frame
@@ -259,7 +259,7 @@ def build_facets(values: dict, context: BuildContext) -> Facets:
 
     Examples
     --------
-    >>> from attitude.torques import BuildContext
+    >>> from attitude.model.torques import BuildContext
     >>> f = build_facets({"facets": [{"type": "plate", "area": 2.0, "normal": [0, 0, 1],
     ...                               "material": "cells"}],
     ...                   "materials": {"cells": {"specular": 0.1, "diffuse": 0.05}}},
@@ -302,7 +302,7 @@ def build_solar_radiation(values: dict, context: BuildContext) -> SolarRadiation
     Examples
     --------
     >>> from astropy.time import Time
-    >>> from attitude.torques import BuildContext
+    >>> from attitude.model.torques import BuildContext
     >>> ctx = BuildContext(epoch=Time("2016-10-01T00:00:00", scale="utc"), frame="GCRF")
     >>> srp = build_solar_radiation({"orbit": {"a": 7.7e6}, "shadow": "none",
     ...     "facets": [{"type": "facet", "area": 1.0, "normal": [1, 0, 0]}]}, ctx)
@@ -330,7 +330,7 @@ def build_drag(values: dict, context: BuildContext) -> AerodynamicDrag:
 
     Examples
     --------
-    >>> from attitude.torques import BuildContext
+    >>> from attitude.model.torques import BuildContext
     >>> drag = build_drag({"orbit": {"a": 6.8e6}, "cd": 2.0,
     ...     "facets": [{"type": "box", "size": [1.0, 1.0, 1.0]}]}, BuildContext())
     >>> drag.cd, type(drag.density).__name__

@@ -38,12 +38,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import quaternion as quat
-from ..errors import TorqueConfigError
-from ..orbit import as_path
-from ..quantities import to_si
-from ..quaternion import cross
-from ..torques import EARTH_ROTATION_RATE
+from ..foundations import quaternion as quat
+from ..foundations.errors import TorqueConfigError
+from ..foundations.quantities import to_si
+from ..foundations.quaternion import cross
+from ..model.orbit import as_path
+from ..model.torques import EARTH_ROTATION_RATE
 from .facets import Facets, as_facets
 from .sun import EARTH_RADIUS
 from .torquebase import EnvironmentTorque, check_vector
@@ -281,12 +281,12 @@ class AerodynamicDrag(EnvironmentTorque):
         """``[("drag", {...})]``: the terms of the one-epoch evaluation (facet sums, drag
         coefficient, co-rotation, the layers of an :class:`ExponentialAtmosphere`, the
         orbit, the time offset) for a compiled kernel, or None with another density
-        model (:meth:`attitude.torques.TorqueModel.compiled_parameters`).
+        model (:meth:`attitude.model.torques.TorqueModel.compiled_parameters`).
 
         Examples
         --------
         >>> from attitude.environment import AerodynamicDrag, Facets
-        >>> from attitude.orbit import KeplerOrbit
+        >>> from attitude.model.orbit import KeplerOrbit
         >>> leo = KeplerOrbit(mu=3.986004418e14, a=6.8e6)
         >>> drag = AerodynamicDrag(Facets.box([1.0, 1.0, 2.0]), leo)
         >>> drag.compiled_parameters(None)[0][1]["bases"][:2]

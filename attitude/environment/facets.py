@@ -1,10 +1,10 @@
 """Flat facets of a spacecraft's outer surface: what radiation pressure and drag act on.
 
 A :class:`Facets` holds, per facet, its area, outward unit normal, centroid (body frame)
-and the optical fractions of :class:`attitude.surface.OpticalProperties` (specular
+and the optical fractions of :class:`attitude.model.surface.OpticalProperties` (specular
 ``rho_s`` and diffuse ``rho_d``; the rest is absorbed).  It is built from the same
-description photometry uses -- a :class:`~attitude.surface.Surface` or a
-:class:`~attitude.shape.Polyhedron` with one material -- or directly, for open
+description photometry uses -- a :class:`~attitude.model.surface.Surface` or a
+:class:`~attitude.model.shape.Polyhedron` with one material -- or directly, for open
 surfaces a closed mesh cannot describe (a thin plate, a solar array: two facets back
 to back).  The torque models of the wing precompute their sums over facets from it.
 
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import TorqueConfigError
-from ..shape import Polyhedron
-from ..surface import OpticalProperties, Surface
+from ..foundations.errors import TorqueConfigError
+from ..model.shape import Polyhedron
+from ..model.surface import OpticalProperties, Surface
 
 __all__ = ["Facets", "as_facets", "rectangle", "triangle_areas"]
 
@@ -235,12 +235,12 @@ class Facets:
 
     @classmethod
     def from_surface(cls, surface: Surface) -> Facets:
-        """The facets of a :class:`~attitude.surface.Surface` (mesh and materials).
+        """The facets of a :class:`~attitude.model.surface.Surface` (mesh and materials).
 
         Examples
         --------
         >>> import attitude as att
-        >>> from attitude.surface import OpticalProperties, Surface
+        >>> from attitude.model.surface import OpticalProperties, Surface
         >>> ball = att.Polyhedron.ellipsoid(1, 1, 1, subdivisions=1)
         >>> f = Facets.from_surface(Surface.uniform(ball, OpticalProperties(0.1, 0.2)))
         >>> len(f), float(f.diffuse[0])
@@ -350,7 +350,7 @@ class Facets:
 
 def as_facets(shape, surface=None) -> Facets:
     """:class:`Facets` from a ``Facets``, a ``Surface``, or a ``Polyhedron`` with optional
-    :class:`~attitude.surface.OpticalProperties` (or a ``Surface`` as ``surface``).
+    :class:`~attitude.model.surface.OpticalProperties` (or a ``Surface`` as ``surface``).
 
     Examples
     --------

@@ -22,17 +22,17 @@ from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 from scipy.interpolate import CubicSpline
 
-from ..errors import OrbitError
+from ..foundations.errors import OrbitError
 
 __all__ = ["EARTH_FRAMES", "teme_to_inertial", "inertial_to_earth_fixed", "gcrf_to_frame"]
 
-#: Inertial frames (labels of :data:`attitude.state.INERTIAL_FRAMES`) that the Earth
+#: Inertial frames (labels of :data:`attitude.model.state.INERTIAL_FRAMES`) that the Earth
 #: models can be expressed in; ``"J2000"`` is read as ``"EME2000"``.
 EARTH_FRAMES = ("GCRF", "ICRF", "EME2000", "J2000", "TEME")
 
 
 def check_frame(frame: str) -> str:
-    """The frame name, upper-case, or an :class:`~attitude.errors.OrbitError`.
+    """The frame name, upper-case, or an :class:`~attitude.foundations.errors.OrbitError`.
 
     Examples
     --------

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..errors import MissingDependencyError, OrbitError
-from ..orbit import as_path
+from ..foundations.errors import MissingDependencyError, OrbitError
+from ..model.orbit import as_path
 from .frames import check_frame, inertial_to_earth_fixed
 from .tabulation import TimeTable
 
@@ -52,7 +52,7 @@ def spherical_to_cartesian(position: np.ndarray, b_r, b_theta, b_phi) -> np.ndar
 class IGRF:
     """The IGRF-14 geomagnetic field along an orbit, inertial components, tesla.
 
-    A drop-in for :class:`attitude.torques.TiltedDipoleField`: ``field(t)`` gives the
+    A drop-in for :class:`attitude.model.torques.TiltedDipoleField`: ``field(t)`` gives the
     field at the body at ``t`` seconds after the epoch, shape ``t.shape + (3,)``.
 
     Parameters
@@ -79,7 +79,7 @@ class IGRF:
     Examples
     --------
     >>> from astropy.time import Time
-    >>> from attitude.orbit import KeplerOrbit
+    >>> from attitude.model.orbit import KeplerOrbit
     >>> leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6871 km", i="51.6 deg")
     >>> field = IGRF(leo, epoch=Time("2024-03-01T00:00:00", scale="utc"))
     >>> b = field(0.0)
@@ -148,7 +148,7 @@ class IGRF:
         Examples
         --------
         >>> from astropy.time import Time
-        >>> from attitude.orbit import KeplerOrbit
+        >>> from attitude.model.orbit import KeplerOrbit
         >>> leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6871 km", i="51.6 deg")
         >>> field = IGRF(leo, epoch=Time("2024-03-01T00:00:00", scale="utc"), max_degree=1)
         >>> field.compiled_parameters((0.0, 60.0))[0]

@@ -36,9 +36,9 @@ from astropy import units as u
 from astropy.coordinates import EarthLocation
 from astropy.time import Time, TimeDelta
 
-from ..errors import MissingDependencyError, TorqueConfigError
-from ..orbit import as_path
-from ..quantities import to_si
+from ..foundations.errors import MissingDependencyError, TorqueConfigError
+from ..foundations.quantities import to_si
+from ..model.orbit import as_path
 from .frames import check_frame, inertial_to_earth_fixed
 from .tabulation import TimeTable
 
@@ -166,7 +166,7 @@ class MSISAtmosphere:
         Examples
         --------
         >>> from astropy.time import Time
-        >>> from attitude.orbit import KeplerOrbit
+        >>> from attitude.model.orbit import KeplerOrbit
         >>> leo = KeplerOrbit.from_elements(mu=3.986004418e14, a="6778 km", i="51.6 deg")
         >>> atm = MSISAtmosphere(150.0, 150.0, 15.0)
         >>> rho = atm.along(leo, epoch=Time("2016-10-01T00:00:00", scale="utc"))

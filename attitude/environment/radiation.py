@@ -38,8 +38,8 @@ equal triangles, each edge in ``k``: ``k = shadow_subdivision``, or by default p
 triangle the smallest ``k`` that makes the sub-triangles' edges at most
 :data:`AUTO_SPACING` (1/24) of the body's extent, up to :data:`AUTO_MAX_SUBDIVISION`
 (16).  One ray leaves the centroid of each sub-triangle toward the Sun, a little above
-the surface (:data:`attitude.raycast.OFFSET_RTOL` of the body's extent); embree
-(:class:`attitude.raycast.Occluder`) tells which rays meet another part of the body.
+the surface (:data:`attitude.model.raycast.OFFSET_RTOL` of the body's extent); embree
+(:class:`attitude.model.raycast.Occluder`) tells which rays meet another part of the body.
 The lit area ``A_k^lit = sum_j a_j`` and its first moment ``m_k = sum_j a_j (r_j -
 r_cm)`` over the unblocked samples replace ``A_k`` and ``A_k r_k`` in the sums above,
 so the force of a partly lit facet acts at the centroid of its lit part.  This is the
@@ -67,12 +67,12 @@ import math
 
 import numpy as np
 
-from .. import quaternion as quat
-from ..errors import TorqueConfigError
-from ..orbit import as_path
-from ..quantities import to_si
-from ..quaternion import cross
-from ..raycast import OFFSET_RTOL, Occluder, load_embree
+from ..foundations import quaternion as quat
+from ..foundations.errors import TorqueConfigError
+from ..foundations.quantities import to_si
+from ..foundations.quaternion import cross
+from ..model.orbit import as_path
+from ..model.raycast import OFFSET_RTOL, Occluder, load_embree
 from .facets import Facets, as_facets, triangle_areas
 from .sun import EARTH_RADIUS, SHADOW_MODELS, SUN_RADIUS, illumination
 from .torquebase import EnvironmentTorque, check_vector
@@ -262,7 +262,8 @@ class SolarRadiationPressure(EnvironmentTorque):
     def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
         """``[("radiation_pressure", {...})]``: the terms of the one-epoch evaluation
         (facet sums, pressure, shadow model, the Sun's and the body's paths, the time
-        offset) for a compiled kernel (:meth:`attitude.torques.TorqueModel.compiled_parameters`);
+        offset) for a compiled kernel
+        (:meth:`attitude.model.torques.TorqueModel.compiled_parameters`);
         None with ``self_shadowing`` (the rays are cast in Python: the integrators call
         the model).
 

@@ -2,7 +2,7 @@
 
 :class:`SunPath` tabulates the geocentric position of the Sun (astropy's built-in
 ephemeris, ``get_body("sun")``: apparent, with light time, in the GCRS) and interpolates
-it; it is a path like :class:`attitude.orbit.KeplerOrbit` (``position(t)``, m, inertial).
+it; it is a path like :class:`attitude.model.orbit.KeplerOrbit` (``position(t)``, m, inertial).
 
 :func:`illumination` gives the fraction of the solar disk that a satellite sees:
 
@@ -24,7 +24,7 @@ from astropy.coordinates import get_body
 from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 
-from ..errors import OrbitError
+from ..foundations.errors import OrbitError
 from .frames import check_frame, gcrf_to_frame
 from .tabulation import TimeTable
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..errors import MissingDependencyError, OrbitError
+from ..foundations.errors import MissingDependencyError, OrbitError
 from .frames import check_frame, teme_to_inertial
 from .tabulation import TimeTable
 
@@ -34,7 +34,8 @@ def _checksum(line: str) -> int:
 
 
 def check_tle(line1: str, line2: str) -> tuple[str, str]:
-    """Both lines, stripped, or an :class:`~attitude.errors.OrbitError` naming the defect.
+    """Both lines, stripped, or an :class:`~attitude.foundations.errors.OrbitError` naming the
+    defect.
 
     Checks the line numbers, the length (69 characters), the modulo-10 checksums and
     that both lines name the same catalogue number.

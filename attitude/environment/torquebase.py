@@ -1,7 +1,7 @@
 """What the environment's torque models share: a time origin that can be moved, the
 characteristic rate from a bound on the torque, the orbit's own rate.
 
-:class:`EnvironmentTorque` is a :class:`attitude.torques.TorqueModel` whose paths
+:class:`EnvironmentTorque` is a :class:`attitude.model.torques.TorqueModel` whose paths
 (orbit, Sun) are read at ``t + time_offset``; :meth:`EnvironmentTorque.shifted` returns a
 copy with the offset moved, and :meth:`EnvironmentTorque.characteristic_rate` the
 fastest rate the torque can drive: ``sqrt(|M|_max / I_min)`` (the libration rate of the
@@ -15,9 +15,9 @@ import copy
 
 import numpy as np
 
-from ..body import RigidBody
-from ..errors import TorqueConfigError
-from ..torques import TorqueModel
+from ..foundations.errors import TorqueConfigError
+from ..model.body import RigidBody
+from ..model.torques import TorqueModel
 
 __all__ = ["EnvironmentTorque", "smallest_moment", "orbital_rate", "check_vector"]
 
@@ -43,7 +43,8 @@ def smallest_moment(body) -> float:
 
 
 def check_vector(value, key: str) -> np.ndarray:
-    """A finite 3-vector, or a :class:`~attitude.errors.TorqueConfigError` naming ``key``.
+    """A finite 3-vector, or a :class:`~attitude.foundations.errors.TorqueConfigError` naming
+    ``key``.
 
     Examples
     --------
@@ -65,7 +66,7 @@ def orbital_rate(orbit, t) -> float:
 
     Examples
     --------
-    >>> from attitude.orbit import KeplerOrbit
+    >>> from attitude.model.orbit import KeplerOrbit
     >>> orbit = KeplerOrbit.from_elements(mu=3.986004418e14, a=7.0e6, e=0.0)
     >>> bool(np.isclose(orbital_rate(orbit, 0.0), 2 * np.pi / orbit.period))
     True

@@ -47,13 +47,13 @@ import numpy as np
 from astropy import units as u
 from astropy.time import Time, TimeDelta
 
-from ..errors import AttitudeError, ScenarioError
+from ..foundations.errors import AttitudeError, ScenarioError
+from ..foundations.spec import Key, Table
+from ..model.regimes import PERIOD_KEYS
+from ..model.state import format_epoch
 from ..photometry.config import PHOTOMETRY_SCHEMA, parse_photometry
 from ..photometry.geometry import Geometry
 from ..photometry.readers import read_lightcurve
-from ..regimes import PERIOD_KEYS
-from ..spec import Key, Table
-from ..state import format_epoch
 from .leastsq import FitResult
 from .observations import (
     AngularVelocityObservations,
@@ -105,7 +105,7 @@ LIGHTCURVE = Table("lightcurve", (
     doc="A lightcurve: the magnitudes, the shape and scattering law that make them, and the "
         "Sun/observer geometry (fixed vectors, or from the target's orbit).")
 
-#: The ``[observations]`` table (declared in :data:`attitude.scenario_spec.SCENARIO`).
+#: The ``[observations]`` table (declared in :data:`attitude.app.scenario_spec.SCENARIO`).
 OBSERVATIONS = Table("observations", (
     Key("free", "any", schema={"type": "array", "items": {"enum": list(PARAMETERS)},
                                "minItems": 1, "uniqueItems": True},
@@ -145,7 +145,7 @@ class ObservationsConfig:
 
     Examples
     --------
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> cfg = load_scenario("scenarios/tumbler_fit.toml").observations
     >>> [type(o).__name__ for o in cfg.observations], cfg.output.name
     (['AttitudeObservations'], 'tumbler_fit_fit.toml')

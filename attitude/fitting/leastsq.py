@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..body import RigidBody
-from ..errors import AttitudeError
-from ..state import AttitudeState
+from ..foundations.errors import AttitudeError
+from ..model.body import RigidBody
+from ..model.state import AttitudeState
 from .observations import LightcurveObservations, seconds_since
 from .parameters import ANGLES, PARAMETERS, RotationModel, free_parameters
 

@@ -25,12 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 from astropy.time import Time
 
-from .. import quaternion as quat
-from ..errors import AttitudeError
+from ..foundations import quaternion as quat
+from ..foundations.errors import AttitudeError
+from ..foundations.quantities import to_si
+from ..model.regimes import PERIOD_KEYS
 from ..photometry.brightness import facet_brightness
 from ..photometry.geometry import Geometry
-from ..quantities import to_si
-from ..regimes import PERIOD_KEYS
 
 __all__ = ["AttitudeObservations", "AngularVelocityObservations", "PeriodObservations",
            "LightcurveObservations", "seconds_since"]
@@ -171,7 +171,7 @@ class PeriodObservations:
     Parameters
     ----------
     **periods : (value, sigma) pairs
-        Keys of :data:`attitude.regimes.PERIOD_KEYS` (``precession``, ``rotation``,
+        Keys of :data:`attitude.model.regimes.PERIOD_KEYS` (``precession``, ``rotation``,
         ``polhode``, ``spin``); values in seconds, Quantities or strings (``"27.38 h"``).
 
     Examples
@@ -228,7 +228,7 @@ class LightcurveObservations:
     shape : attitude.Polyhedron
         The body's shape in the body frame of the fit.
     law : str or scattering law
-        As in :func:`attitude.photometry.lightcurve` (default ``"ls-lambert"``).
+        As in :func:`attitude.photometry.dataset` (default ``"ls-lambert"``).
     sessions : (n,) array, optional
         Session label of each magnitude (the ``session`` variable of
         :func:`attitude.photometry.read_lightcurve`: an ALCDEF block, a night): each

@@ -37,12 +37,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .. import quaternion as quat
-from ..body import RigidBody
-from ..freebody import diagnose_many
+from ..foundations import quaternion as quat
+from ..model.body import RigidBody
+from ..model.freebody import diagnose_many
+from ..model.sampling import tumbling_state
+from ..model.state import AttitudeState, direction_frame
 from ..propagation.torquefree import free_rotation
-from ..sampling import tumbling_state
-from ..state import AttitudeState, direction_frame
 
 __all__ = ["PARAMETERS", "ANGLES", "RotationModel", "free_parameters"]
 
@@ -114,7 +114,7 @@ class RotationModel:
         return q, w
 
     def periods(self, values: np.ndarray) -> dict:
-        """:func:`attitude.freebody.diagnose_many` of each parameter vector."""
+        """:func:`attitude.model.freebody.diagnose_many` of each parameter vector."""
         moments, _, w_p, bad = self.principal_states(values)
         good = np.isfinite(moments).all(axis=1)
         safe_m = np.where(good[:, None], moments, [1.0, 2.0, 2.5])

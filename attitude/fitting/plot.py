@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plot import agg_figure
+from ..app.plot import agg_figure
 from .leastsq import FitResult
 from .parameters import ANGLES
 from .posterior import Posterior

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ..errors import MissingDependencyError
+from ..foundations.errors import MissingDependencyError
 from .leastsq import FitResult, Objective, project
 from .parameters import PARAMETERS
 

@@ -20,11 +20,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..body import RigidBody
-from ..errors import AttitudeError
-from ..freebody import diagnose
+from ..foundations.errors import AttitudeError
+from ..model.body import RigidBody
+from ..model.freebody import diagnose
+from ..model.state import AttitudeState
 from ..propagation.propagator import propagate
-from ..state import AttitudeState
 from .observations import LightcurveObservations
 from .parameters import PARAMETERS, free_parameters
 

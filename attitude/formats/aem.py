@@ -70,11 +70,11 @@ import numpy as np
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
-from .. import quaternion as quat
-from ..body import RigidBody
-from ..ephemeris import Ephemeris, write_atomically
-from ..errors import AttitudeWarning, EphemerisFormatError
-from ..state import INERTIAL_FRAMES, format_epoch
+from ..foundations import quaternion as quat
+from ..foundations.errors import AttitudeWarning, EphemerisFormatError
+from ..model.body import RigidBody
+from ..model.ephemeris import Ephemeris, write_atomically
+from ..model.state import INERTIAL_FRAMES, format_epoch
 
 __all__ = [
     "read_aem",

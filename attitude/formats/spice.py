@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..ephemeris import AtomicFiles, Ephemeris
-from ..errors import EphemerisFormatError, MissingDependencyError
+from ..foundations.errors import EphemerisFormatError, MissingDependencyError
+from ..model.ephemeris import AtomicFiles, Ephemeris
 from .aem import read_aem
 
 __all__ = ["write_ck", "convert_to_ck", "CKFiles", "leapseconds_kernel_text", "SPICE_FRAMES",

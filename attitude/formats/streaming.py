@@ -4,7 +4,7 @@
 :class:`EphemerisWriter` writes the same file as :meth:`Ephemeris.to_netcdf` (same schema,
 attributes, CF layout, chunked zlib variables), block by block, for one body (dims
 ``time, ...``) or a batch (dims ``body, time, ...``), into a temporary file that
-:class:`~attitude.ephemeris.AtomicFiles` renames onto the destination when the writer
+:class:`~attitude.model.ephemeris.AtomicFiles` renames onto the destination when the writer
 closes normally; on an exception the temporary file is removed and an existing
 destination is left untouched.
 
@@ -50,13 +50,13 @@ import netCDF4
 import numpy as np
 from astropy.time import Time
 
-from ..body import RigidBody
-from ..ephemeris import CHUNK_TIME, AtomicFiles, Ephemeris, file_encoding
-from ..errors import EphemerisFormatError, InvalidStateError, WriterError
-from ..population import check_batch
+from ..foundations.errors import EphemerisFormatError, InvalidStateError, WriterError
+from ..model.body import RigidBody
+from ..model.ephemeris import CHUNK_TIME, AtomicFiles, Ephemeris, file_encoding
+from ..model.population import check_batch
+from ..model.state import AttitudeState
 from ..propagation.propagator import elapsed_seconds, propagate
 from ..propagation.splitting import choose_step, integrate_splitting
-from ..state import AttitudeState
 
 __all__ = ["EphemerisWriter", "UniformTimes", "propagate_to_netcdf"]
 
@@ -321,7 +321,7 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
 
     >>> import numpy as np, attitude as att, tempfile, pathlib
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.torques import ConstantTorque
+    >>> from attitude.model.torques import ConstantTorque
     >>> bodies = [att.RigidBody.from_principal_moments(m) for m in ([1, 2, 3], [2, 3, 4])]
     >>> states = [att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.0, 0.3])] * 2
     >>> out = pathlib.Path(tempfile.mkdtemp()) / "torqued.nc"

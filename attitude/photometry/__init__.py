@@ -14,8 +14,8 @@ and the two-period Fourier series), ``readers`` (ALCDEF and CSV), ``config`` (th
 from __future__ import annotations
 
 from attitude.photometry.brightness import facet_brightness, lightcurve
+from attitude.photometry.dataset import Lightcurve
 from attitude.photometry.geometry import Geometry, phase_angle, reduced_magnitude
-from attitude.photometry.lightcurve import Lightcurve
 from attitude.photometry.periods import PeriodFit, fit_periods, lattice_combination
 from attitude.photometry.readers import read_alcdef, read_csv, read_lightcurve
 from attitude.photometry.scattering import (

@@ -19,13 +19,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from attitude.errors import PhotometryError
+from attitude.foundations.errors import PhotometryError
+from attitude.model.shape import Polyhedron
+from attitude.photometry.dataset import Lightcurve
 from attitude.photometry.geometry import Geometry
-from attitude.photometry.lightcurve import Lightcurve
 from attitude.photometry.periods import blas_single_thread
 from attitude.photometry.scattering import FacetMaterials, scattering_law
 from attitude.photometry.shadows import ShadowCaster
-from attitude.shape import Polyhedron
 
 __all__ = ["lightcurve", "facet_brightness"]
 

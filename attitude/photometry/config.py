@@ -41,19 +41,19 @@ from typing import Any
 import astropy.units as u
 import numpy as np
 
-from attitude.errors import AttitudeError, ScenarioError
-from attitude.orbit import KeplerOrbit
+from attitude.foundations.errors import AttitudeError, ScenarioError
+from attitude.foundations.quantities import to_si
+from attitude.model.orbit import KeplerOrbit
+from attitude.model.shape import Polyhedron
 from attitude.photometry.brightness import lightcurve
+from attitude.photometry.dataset import Lightcurve
 from attitude.photometry.geometry import Geometry
-from attitude.photometry.lightcurve import Lightcurve
 from attitude.photometry.periods import PeriodFit, fit_periods, lattice_combination
 from attitude.photometry.scattering import FacetMaterials, scattering_law
 from attitude.propagation.propagator import propagate
-from attitude.quantities import to_si
-from attitude.shape import Polyhedron
 
 #: JSON Schema of the ``[photometry]`` table (declared in
-#: :data:`attitude.scenario_spec.SCENARIO`; :func:`parse_photometry` checks the same keys).
+#: :data:`attitude.app.scenario_spec.SCENARIO`; :func:`parse_photometry` checks the same keys).
 PHOTOMETRY_SCHEMA = {
     "type": "object",
     "additionalProperties": False,
@@ -232,7 +232,7 @@ class PhotometryConfig:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
     >>> _ = path.write_text('''
     ... [body]
@@ -480,7 +480,7 @@ class LightcurveRun:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
     >>> _ = path.write_text('''
     ... [body]
@@ -548,7 +548,7 @@ def run_lightcurve(scenario, config: PhotometryConfig, *, output=None,
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
     >>> _ = path.write_text('''
     ... [body]
@@ -612,7 +612,7 @@ def check_lightcurve(specs, fit: PeriodFit, lc: Lightcurve) -> list[dict]:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "spin.toml"
     >>> _ = path.write_text('''
     ... [body]

@@ -5,7 +5,7 @@ and toward the observer, in the inertial frame of the attitude ephemeris.
 :class:`Geometry` holds them (constant or one per epoch), with the heliocentric and
 observer distances and the light time when they are known.
 :meth:`Geometry.from_orbit` computes them from the target's heliocentric
-:class:`~attitude.orbit.KeplerOrbit` and an observer: the Earth (astropy's built-in
+:class:`~attitude.model.orbit.KeplerOrbit` and an observer: the Earth (astropy's built-in
 ephemeris) or any object with ``position(t)`` (another orbit, a tabulated path).
 
 Conventions: times are seconds since the epoch of the ephemeris, at the *body*
@@ -21,8 +21,8 @@ import astropy.units as u
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from attitude.errors import PhotometryError
-from attitude.orbit import as_path
+from attitude.foundations.errors import PhotometryError
+from attitude.model.orbit import as_path
 
 __all__ = ["Geometry", "reduced_magnitude", "phase_angle", "AU", "SPEED_OF_LIGHT"]
 
@@ -242,7 +242,7 @@ class Geometry:
         Examples
         --------
         >>> from astropy.time import Time
-        >>> from attitude.orbit import KeplerOrbit
+        >>> from attitude.model.orbit import KeplerOrbit
         >>> from attitude.photometry import Geometry
         >>> orbit = KeplerOrbit.from_elements(mu="1.32712440018e20 m3/s2", a="0.9224 AU",
         ...                                   e=0.1914, i="3.34 deg")

@@ -47,7 +47,7 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 from scipy.optimize import least_squares
 
-from attitude.errors import PhotometryError
+from attitude.foundations.errors import PhotometryError
 
 __all__ = ["PeriodFit", "fit_periods", "fourier_terms", "lattice_combination"]
 

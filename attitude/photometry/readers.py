@@ -26,7 +26,7 @@ CSV: a header row naming the columns: time as ``jd`` (UTC), ``mjd`` (UTC) or ``t
 ``magerr`` / ``magnitude_error`` / ``sigma`` and ``session``.  Lines starting with
 ``#`` are comments.
 
-Every malformed file is a :class:`~attitude.errors.LightcurveFormatError` naming the
+Every malformed file is a :class:`~attitude.foundations.errors.LightcurveFormatError` naming the
 file and the line.
 
 References
@@ -43,8 +43,8 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time
 
-from attitude.errors import LightcurveFormatError
-from attitude.photometry.lightcurve import Lightcurve
+from attitude.foundations.errors import LightcurveFormatError
+from attitude.photometry.dataset import Lightcurve
 
 __all__ = ["read_lightcurve", "read_alcdef", "read_csv"]
 

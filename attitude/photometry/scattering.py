@@ -43,8 +43,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from attitude.errors import PhotometryError
-from attitude.surface import Surface
+from attitude.foundations.errors import PhotometryError
+from attitude.model.surface import Surface
 
 __all__ = ["ScatteringLaw", "Lambert", "LommelSeeliger", "LommelSeeligerLambert", "Hapke",
            "Phong", "AshikhminShirley", "FacetMaterials", "LAWS", "scattering_law",
@@ -438,7 +438,7 @@ class FacetMaterials:
                      exponent: float = 100.0) -> FacetMaterials:
         """Diffuse + specular laws from a surface's optical properties.
 
-        Each :class:`~attitude.surface.OpticalProperties` becomes a ``"phong"`` or
+        Each :class:`~attitude.model.surface.OpticalProperties` becomes a ``"phong"`` or
         ``"ashikhmin-shirley"`` law with ``diffuse = rho_d`` and ``specular = rho_s``
         (the fractions the solar-radiation-pressure model uses), and the given
         specular exponent (the glint's sharpness, which the fractions do not fix).
@@ -446,7 +446,7 @@ class FacetMaterials:
         Examples
         --------
         >>> import attitude as att
-        >>> from attitude.surface import OpticalProperties, Surface
+        >>> from attitude.model.surface import OpticalProperties, Surface
         >>> from attitude.photometry.scattering import FacetMaterials
         >>> shape = att.Polyhedron.ellipsoid(1, 1, 1, subdivisions=0)
         >>> surf = Surface.uniform(shape, OpticalProperties(specular=0.6, diffuse=0.2))

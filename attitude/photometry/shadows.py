@@ -7,7 +7,7 @@ faces both the Sun and the observer, starting a small distance above the centroi
 The test is per facet (no partial shadows inside a facet): the error shrinks with the
 facet size.
 
-The rays go through :class:`attitude.raycast.Occluder`.  embree is an optional
+The rays go through :class:`attitude.model.raycast.Occluder`.  embree is an optional
 dependency, installed by the ``shadows`` extra (``pip install
 "attitude-dynamics[shadows]"``, which brings ``embreex``).
 """
@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from attitude.raycast import OFFSET_RTOL, Occluder
-from attitude.shape import Polyhedron
+from attitude.model.raycast import OFFSET_RTOL, Occluder
+from attitude.model.shape import Polyhedron
 
 __all__ = ["ShadowCaster"]
 

@@ -4,8 +4,8 @@ One entry point, :func:`attitude.propagate` (:mod:`.propagator`), and the method
 it, one module each:
 
 - :mod:`.torquefree`: the exact Euler–Poinsot solution (Jacobi elliptic functions),
-  vectorised over bodies and times, on :mod:`attitude.freebody` (the free-body
-  algebra) and :mod:`attitude.elliptic` (Landen transformations, Bulirsch's ``cel``,
+  vectorised over bodies and times, on :mod:`attitude.model.freebody` (the free-body
+  algebra) and :mod:`attitude.foundations.elliptic` (Landen transformations, Bulirsch's ``cel``,
   double-double arithmetic);
 - :mod:`.splitting`: the splitting integrator with torques (exact free flow composed with
   torque kicks, orders 2, 4 and 6);

@@ -15,12 +15,12 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .. import quaternion as quat
-from ..body import RigidBody
-from ..ephemeris import Ephemeris, build_dataset, momentum_and_energy
-from ..errors import AttitudeError, InvalidStateError
-from ..population import Ensemble
-from ..sampling import MODELS
+from ..foundations import quaternion as quat
+from ..foundations.errors import AttitudeError, InvalidStateError
+from ..model.body import RigidBody
+from ..model.ephemeris import Ephemeris, build_dataset, momentum_and_energy
+from ..model.population import Ensemble
+from ..model.sampling import MODELS
 from .cluster import client_for, shared_local_client
 from .reference import integrate_reference_batch
 from .splitting import integrate_splitting

@@ -13,7 +13,7 @@ import atexit
 import contextlib
 import os
 
-from ..errors import AttitudeError
+from ..foundations.errors import AttitudeError
 
 __all__ = ["local_cluster", "shared_local_client", "client_for"]
 

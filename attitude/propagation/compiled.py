@@ -26,7 +26,7 @@ only well inside the first quarter period; beyond it scipy returns values that a
 elliptic functions at all (``sn > 1``, ``cn = -2.9e5`` at ``u = 40``, ``m = 1 - 1e-11``).
 Here the expansion is used only where its next term is below the rounding error, and
 elsewhere the descending Landen transformation from ``1 - m`` (as the closed form does,
-:func:`attitude.elliptic.landen_sncndn`) on the argument reduced to ``[0, K/2]``;
+:func:`attitude.foundations.elliptic.landen_sncndn`) on the argument reduced to ``[0, K/2]``;
 ``splitting`` takes this function there too.
 
 References
@@ -47,8 +47,8 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from .. import freebody as fb
-from .. import quaternion as quat
+from ..foundations import quaternion as quat
+from ..model import freebody as fb
 
 __all__ = ["NUMBA", "jit", "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
 
@@ -79,9 +79,9 @@ def _numba():
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "compiled_dop853.py")
 #: The sources compiled into the kernels: theirs and the Kepler solver of
-#: :mod:`attitude.orbit` (compiled by :mod:`.compiled_torques`; numba keeps that one's
+#: :mod:`attitude.model.orbit` (compiled by :mod:`.compiled_torques`; numba keeps that one's
 #: own cache fresh, not the callers').
-KERNEL_SOURCES = KERNEL_MODULES + ("../orbit.py",)
+KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py",)
 
 
 def _drop_stale_cache() -> None:

@@ -2,7 +2,7 @@
 
 A torque model is a Python object; calling it costs microseconds of dispatch, more
 than the physics.  :func:`compile_torques` asks each model for its compiled form
-(:meth:`attitude.torques.TorqueModel.compiled_parameters`: the formula's name, its SI
+(:meth:`attitude.model.torques.TorqueModel.compiled_parameters`: the formula's name, its SI
 parameters and the paths or fields it reads, each with a ``compiled_parameters`` of its
 own) and lays the models out in three flat arrays, ``kinds`` (one formula per term),
 ``offsets`` (where each term's numbers start) and ``params`` (all the numbers);
@@ -35,14 +35,14 @@ at ``t`` plus it, 0 but for a model wrapped by ``shifted``).  A path or a field 
 the index of its block in ``params``; each path or field is
 stored once however many terms read it.  A path block is its kind then its numbers:
 ``fixed`` (0: position), ``kepler`` (1: ``a, e, b = sqrt(1 - e^2), M0, n, mu, P (3),
-Q (3)``, Kepler's equation solved as :func:`attitude.orbit.solve_kepler`),
+Q (3)``, Kepler's equation solved as :func:`attitude.model.orbit.solve_kepler`),
 ``piecewise_cubic`` (2: the number ``N`` of breakpoints, their spacing if uniform else
 0, the breakpoints, the coefficients ``(4, N - 1, 3)`` highest power first).  A field
 block is ``uniform`` (0: vector), ``tilted_dipole`` (1: ``mu0 m / 4 pi``, sine and
 cosine of the tilt, rotation angle, rate, pole longitude, the index of the orbit's path)
 or ``piecewise_cubic`` (2, as a path).
 
-Tabulated paths and fields (:class:`~attitude.orbit.TabulatedPath`,
+Tabulated paths and fields (:class:`~attitude.model.orbit.TabulatedPath`,
 :class:`~attitude.environment.TLEOrbit`, :class:`~attitude.environment.SunPath`,
 :class:`~attitude.environment.IGRF`) hand over their own interpolating cubics over the
 run's ``t_span`` (the segments of :class:`~attitude.environment.TimeTable` that cover
@@ -52,7 +52,7 @@ error of its own: it evaluates the polynomials the Python path evaluates.  Witho
 
 numba is optional: without it (or with ``ATTITUDE_NO_NUMBA=1``) the same functions run as
 plain Python, slowly but with the same results.  A model without a compiled form (a
-user's function or subclass, a :class:`~attitude.orbit.CallablePath`) makes
+user's function or subclass, a :class:`~attitude.model.orbit.CallablePath`) makes
 :func:`compile_torques` return None: the caller then uses the Python models.
 """
 
@@ -64,10 +64,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..body import RigidBody
-from ..errors import InvalidStateError
-from ..orbit import solve_kepler_scalar
-from ..torques import TorqueModel
+from ..foundations.errors import InvalidStateError
+from ..model.body import RigidBody
+from ..model.orbit import solve_kepler_scalar
+from ..model.torques import TorqueModel
 from .compiled import NUMBA
 from .compiled import jit as _jit
 
@@ -91,7 +91,7 @@ _UNIFORM, _DIPOLE = 0.0, 1.0
 # --- kernels ----------------------------------------------------------------------------
 
 
-#: :func:`attitude.orbit.solve_kepler` for one ``M``: the scalar form of its iteration,
+#: :func:`attitude.model.orbit.solve_kepler` for one ``M``: the scalar form of its iteration,
 #: compiled (one solver for the Python and the compiled torques).
 _eccentric_anomaly = _jit(solve_kepler_scalar)
 
@@ -278,7 +278,7 @@ def _drag(params, i, t, qx, qy, qz, qw):
 @_jit
 def _position(params, i, t):
     """The path block at ``params[i]`` at ``t``: inertial position, m (as
-    :meth:`attitude.orbit.KeplerOrbit.state`: ``r = a ((cos E - e) P + b sin E Q)``)."""
+    :meth:`attitude.model.orbit.KeplerOrbit.state`: ``r = a ((cos E - e) P + b sin E Q)``)."""
     kind = params[i]
     if kind == _FIXED:
         return params[i + 1], params[i + 2], params[i + 3]
@@ -298,7 +298,7 @@ def _position(params, i, t):
 @_jit
 def _field(params, i, t):
     """The field block at ``params[i]`` at ``t``: inertial field, T (as
-    :class:`attitude.torques.TiltedDipoleField`:
+    :class:`attitude.model.torques.TiltedDipoleField`:
     ``B = mu0 m / (4 pi r^3) (3 (m_hat . r_hat) r_hat - m_hat)``)."""
     kind = params[i]
     if kind == _UNIFORM:
@@ -320,7 +320,7 @@ def _field(params, i, t):
 @_jit
 def _to_body(qx, qy, qz, qw, vx, vy, vz):
     """``v`` rotated by the inverse of ``q`` (inertial -> body), as
-    :func:`attitude.quaternion.rotate_parts` with ``inverse=True``."""
+    :func:`attitude.foundations.quaternion.rotate_parts` with ``inverse=True``."""
     ux, uy, uz = -qx, -qy, -qz
     tx = 2.0 * (uy * vz - uz * vy)
     ty = 2.0 * (uz * vx - ux * vz)
@@ -361,7 +361,7 @@ def body_torque(kinds, offsets, params, t0, q_b, w_b, out):
     --------
     >>> import numpy as np
     >>> from attitude import RigidBody
-    >>> from attitude.torques import ConstantTorque
+    >>> from attitude.model.torques import ConstantTorque
     >>> c = compile_torques([ConstantTorque([0.0, 0.0, 1e-3], frame="inertial")],
     ...                     RigidBody.from_principal_moments([1.0, 2.0, 3.0]))
     >>> out = np.zeros(3)
@@ -457,7 +457,7 @@ class CompiledTorques:
     --------
     >>> import numpy as np
     >>> from attitude import RigidBody
-    >>> from attitude.torques import ConstantTorque, GravityGradient
+    >>> from attitude.model.torques import ConstantTorque, GravityGradient
     >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
     >>> c = compile_torques(GravityGradient(3.986004418e14, [7e6, 0.0, 0.0])
     ...                     + ConstantTorque([0.0, 0.0, 1e-6]), body)
@@ -623,22 +623,22 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
         The times (s since the epoch) the run covers.  The environment's tabulated
         paths and fields (a TLE orbit, the Sun, IGRF) hand over their cubics over it, so
         they need it (without it they have no compiled form); a
-        :class:`~attitude.orbit.TabulatedPath` hands over its whole spline and checks
+        :class:`~attitude.model.orbit.TabulatedPath` hands over its whole spline and checks
         ``t_span`` against its table.
 
     Returns
     -------
     CompiledTorques or None
-        None if a model is a plain function, a :class:`~attitude.torques.FunctionTorque`,
+        None if a model is a plain function, a :class:`~attitude.model.torques.FunctionTorque`,
         a user's subclass (or the generic wrapper of ``shifted`` around one of the
         models whose ``shifted`` has no form of its own), or reads a path or field
-        without a compiled form (a :class:`~attitude.orbit.CallablePath`, a user's field
+        without a compiled form (a :class:`~attitude.model.orbit.CallablePath`, a user's field
         function, a density function): the caller then calls the models in Python.
 
     Raises
     ------
     InvalidStateError
-        If ``body`` is not one :class:`~attitude.body.RigidBody`.
+        If ``body`` is not one :class:`~attitude.model.body.RigidBody`.
 
     Notes
     -----
@@ -650,8 +650,8 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
     Examples
     --------
     >>> from attitude import RigidBody
-    >>> from attitude.orbit import KeplerOrbit
-    >>> from attitude.torques import FunctionTorque, GravityGradient
+    >>> from attitude.model.orbit import KeplerOrbit
+    >>> from attitude.model.torques import FunctionTorque, GravityGradient
     >>> body = RigidBody.from_principal_moments([100.0, 200.0, 250.0])
     >>> orbit = KeplerOrbit(mu=3.986004418e14, a=7.0e6, e=0.01)
     >>> compile_torques([GravityGradient(orbit=orbit)], body)

@@ -29,8 +29,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import InvalidStateError, PropagationError
-from ..quantities import to_si
+from ..foundations.errors import InvalidStateError, PropagationError
+from ..foundations.quantities import to_si
 
 __all__ = ["Event", "nutation_crossing", "event_table"]
 

@@ -16,13 +16,13 @@ import numpy as np
 from astropy import units as u
 from astropy.time import Time
 
-from .. import quaternion as quat
-from ..body import RigidBody, as_bodies
-from ..ephemeris import Ephemeris
-from ..errors import InvalidStateError
-from ..population import Ensemble, check_batch
-from ..quantities import to_si
-from ..state import AttitudeState, stack_states
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidStateError
+from ..foundations.quantities import to_si
+from ..model.body import RigidBody, as_bodies
+from ..model.ephemeris import Ephemeris
+from ..model.population import Ensemble, check_batch
+from ..model.state import AttitudeState, stack_states
 from .batch import propagate_ensemble
 from .events import as_events, locate, name_of
 from .reference import integrate_reference_batch, integrate_reference_events
@@ -98,7 +98,7 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     times : array-like (s since the epoch), Quantity, or astropy Time array
     torques : sequence of torque models, optional
         Callables ``torque(t, quaternion, omega_body, body) -> (3,)`` body-frame N m
-        (:mod:`attitude.torques`).
+        (:mod:`attitude.model.torques`).
     method : {"exact", "splitting", "integrator"}, optional
         ``"exact"``: the closed-form torque-free solution.  ``"splitting"``: the exact
         free flow composed with torque kicks

@@ -13,7 +13,7 @@ components.  It is the trusted baseline that faster methods are checked against.
 A torque model is any callable ``torque(t, quaternion, omega_body, body)`` returning the
 body-frame torque in N m; ``t`` is seconds since the epoch, ``quaternion`` the
 body -> inertial quaternion (scalar-last).  A model with ``internal = True`` (a torque
-between parts of the body, :class:`attitude.torques.EnergyDissipation`) turns ``L`` in
+between parts of the body, :class:`attitude.model.torques.EnergyDissipation`) turns ``L`` in
 the body frame only: the attitude then turns at ``omega + (M x L)/L^2``, which keeps
 the inertial ``L`` fixed.
 """
@@ -25,10 +25,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .. import quaternion as quat
-from ..body import RigidBody
-from ..errors import InvalidStateError, PropagationError
-from ..torques import internal_rate
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidStateError, PropagationError
+from ..model.body import RigidBody
+from ..model.torques import internal_rate
 from . import compiled_dop853
 from .compiled import NUMBA, each_on_cores
 from .compiled_torques import compile_torques

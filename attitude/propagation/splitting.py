@@ -41,7 +41,7 @@ as for ``p^2/2 + V(q)``; ~10x smaller error than S6 at the same cost), else
 RK sub-step is of order 2 for Strang, 4 otherwise; the limit shows only when the damping
 is fast on the step).  With no torque at all every scheme is the exact solution to
 round-off.  The default step is :func:`choose_step`: set by the torques' own time scales
-(:meth:`attitude.torques.TorqueModel.characteristic_rate`) and by how fast each torque
+(:meth:`attitude.model.torques.TorqueModel.characteristic_rate`) and by how fast each torque
 changes along the free motion, not by the spin.  ``docs/integrators.md`` has the
 formulas, the measured orders, accuracy and timings, and which method to use when.
 
@@ -76,13 +76,13 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import special as sp
 
-from .. import freebody as fb
-from .. import quaternion as quat
-from ..body import RigidBody, as_bodies, to_body_frame, to_principal_frame
 from ..deprecation import moved_attribute
-from ..errors import InvalidStateError, PropagationError
-from ..freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
-from ..torques import as_torque_model
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidStateError, PropagationError
+from ..model import freebody as fb
+from ..model.body import RigidBody, as_bodies, to_body_frame, to_principal_frame
+from ..model.freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
+from ..model.torques import as_torque_model
 from . import compiled, compiled_loop
 from .compiled_torques import compile_torques
 from .reference import checked_rtol
@@ -529,7 +529,7 @@ def _is_conservative(model) -> bool:
 
 def _is_internal(model) -> bool:
     """A torque between parts of the body (``internal = True``): it keeps the inertial
-    angular momentum (:attr:`attitude.torques.TorqueModel.internal`)."""
+    angular momentum (:attr:`attitude.model.torques.TorqueModel.internal`)."""
     return getattr(model, "internal", False) is True
 
 
@@ -763,7 +763,7 @@ def choose_step(bodies, quat0, omega0, torques=(), *, order: int = 4,
     ``nu`` reaches the spin and the rule is the previous one, ``(Omega^2
     omega_M)^(1/3)``, for which ``N`` was calibrated (~1e-10 relative accuracy over a
     few orbits at order 4 and 6, ~1e-6 at order 2; docs/integrators.md has the
-    measurements).  Only the protocol of :class:`~attitude.torques.TorqueModel` is used
+    measurements).  Only the protocol of :class:`~attitude.model.torques.TorqueModel` is used
     (``characteristic_rate`` and the call), so a user's model is treated like the
     built-in ones.  Returns ``inf`` without torques (the free flow is exact in one
     step).
@@ -772,7 +772,7 @@ def choose_step(bodies, quat0, omega0, torques=(), *, order: int = 4,
     --------
     >>> import math
     >>> from attitude.propagation.splitting import choose_step, STEPS_PER_PERIOD
-    >>> from attitude.torques import EnergyDissipation
+    >>> from attitude.model.torques import EnergyDissipation
     >>> h = choose_step([1.0, 2.0, 3.0], [0, 0, 0, 1], [0.0, 0.0, 5.0],  # pure spin about C
     ...                 [EnergyDissipation(600.0)])
     >>> bool(math.isclose(h, 2 * math.pi * 600.0 / STEPS_PER_PERIOD[4]))
@@ -1316,11 +1316,11 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
         backwards from 0).
     torques : sequence of torque models (or one model)
         ``torque(t, quaternion, omega_body, body) -> body-frame N m``
-        (:mod:`attitude.torques`).  Models with ``velocity_dependent = False`` are
+        (:mod:`attitude.model.torques`).  Models with ``velocity_dependent = False`` are
         exact kicks; the others are integrated inside the kick.  In a batch a model is
         called once per kick with arrays ``(N, 4)``, ``(N, 3)`` and a
-        :class:`attitude.body.BodyBatch`; for one body with ``(4,)``, ``(3,)`` and the
-        :class:`~attitude.body.RigidBody` (like the reference integrator).
+        :class:`attitude.model.body.BodyBatch`; for one body with ``(4,)``, ``(3,)`` and the
+        :class:`~attitude.model.body.RigidBody` (like the reference integrator).
     step : float, optional
         Step, s (with ``rtol``: the longest step).  Default: :func:`choose_step`.
     order : {2, 4, 6}, optional
@@ -1372,7 +1372,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     --------
     >>> import numpy as np
     >>> from attitude.propagation.splitting import integrate_splitting
-    >>> from attitude.torques import GravityGradient
+    >>> from attitude.model.torques import GravityGradient
     >>> gg = GravityGradient(3.986004418e14, [7.0e6, 0.0, 0.0])
     >>> q, w = integrate_splitting([1.0, 2.0, 3.0], [0, 0, 0, 1], [1e-3, 2e-3, 3e-3],
     ...                            np.linspace(0.0, 600.0, 7), torques=[gg], step=10.0)

@@ -30,12 +30,12 @@ import warnings
 import numpy as np
 from scipy import special as sp
 
-from .. import elliptic as el
-from .. import freebody as fb
-from .. import quaternion as quat
-from ..body import to_principal_frame
 from ..deprecation import moved_attribute
-from ..freebody import (
+from ..foundations import elliptic as el
+from ..foundations import quaternion as quat
+from ..model import freebody as fb
+from ..model.body import to_principal_frame
+from ..model.freebody import (
     EQUAL_MOMENTS_RTOL,
     NEAR_SEPARATRIX_WARN,
     PURE_SPIN_TOL,
@@ -52,9 +52,9 @@ __all__ = [
 ]
 
 #: The branch tolerances (:data:`PURE_SPIN_TOL`, :data:`SEPARATRIX_M1_TOL`,
-#: :data:`NEAR_SEPARATRIX_WARN`) live in :mod:`attitude.freebody` with their reasons.
+#: :data:`NEAR_SEPARATRIX_WARN`) live in :mod:`attitude.model.freebody` with their reasons.
 #: ``RTOL_AXISYMMETRIC`` is this module's earlier name of
-#: :data:`attitude.freebody.EQUAL_MOMENTS_RTOL` (the same value), kept for its users.
+#: :data:`attitude.model.freebody.EQUAL_MOMENTS_RTOL` (the same value), kept for its users.
 RTOL_AXISYMMETRIC = EQUAL_MOMENTS_RTOL
 
 
@@ -153,7 +153,7 @@ def _col(x):
 # ===========================================================================
 def _triaxial_setup(I, w, dhi, dlo, lam):
     """Evaluation constants of the elliptic solution (TF 16-23) from the per-body
-    constants of :func:`attitude.freebody.elliptic_constants`.
+    constants of :func:`attitude.model.freebody.elliptic_constants`.
 
     ``lam`` is a scalar bool: the whole group is LAM (kernel frame relabelled) or SAM.
     """

@@ -1,6 +1,6 @@
 """The spin-orbit wing: moons and other bodies on orbits about a primary.
 
-:class:`SpinOrbit` (a body on a :class:`~attitude.orbit.KeplerOrbit`) holds the planar
+:class:`SpinOrbit` (a body on a :class:`~attitude.model.orbit.KeplerOrbit`) holds the planar
 problem and the 3-D problem with the gravity-gradient torque; the p:q resonances with
 their widths (:mod:`~attitude.spinorbit.resonances`), the forced libration in longitude
 (:mod:`~attitude.spinorbit.libration`), surfaces of section classified by the

@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import SpinOrbitError
-from ..orbit import KeplerOrbit
+from ..foundations.errors import SpinOrbitError
+from ..model.orbit import KeplerOrbit
 
 __all__ = ["forced_libration_amplitude", "orbit_basis", "long_axis_angle",
            "LibrationMeasurement", "measure_libration"]

@@ -2,8 +2,8 @@ r"""``SpinOrbit``: a rigid body on a Keplerian orbit about its primary.
 
 The planar problem (spin axis, moment ``C``, along the orbit normal) is solved by
 :mod:`attitude.spinorbit.planar`; the full 3-D problem by :func:`attitude.propagate` with
-the gravity-gradient torque of :class:`attitude.torques.GravityGradient` on the same
-:class:`~attitude.orbit.KeplerOrbit`.  The two meet in :meth:`SpinOrbit.initial_state`
+the gravity-gradient torque of :class:`attitude.model.torques.GravityGradient` on the same
+:class:`~attitude.model.orbit.KeplerOrbit`.  The two meet in :meth:`SpinOrbit.initial_state`
 (a planar state as a 3-D :class:`~attitude.AttitudeState`) and in
 :meth:`SpinOrbit.stability`, which linearises the 3-D motion about the planar periodic
 orbit of a p:q state (Wisdom, Peale & Mignard 1984, sec. IV: Hyperion's synchronous state
@@ -20,13 +20,13 @@ import xarray as xr
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
-from ..body import RigidBody
-from ..errors import SpinOrbitError
-from ..orbit import KeplerOrbit
+from ..foundations.errors import SpinOrbitError
+from ..model.body import RigidBody
+from ..model.orbit import KeplerOrbit
+from ..model.regimes import Thresholds
+from ..model.state import AttitudeState
+from ..model.torques import GravityGradient
 from ..propagation.propagator import propagate
-from ..regimes import Thresholds
-from ..state import AttitudeState
-from ..torques import GravityGradient
 from .libration import forced_libration_amplitude, orbit_basis
 from .planar import TWO_PI, advance, periodic_orbit, stroboscopic_map
 from .resonances import Resonance, resonance_list
@@ -353,7 +353,7 @@ class SpinOrbit:
         Each initial condition (angle of the long axis from the periapsis direction,
         spin rate / mean motion, at a periapsis passage) is followed for ``n_orbits``
         orbits of the planar problem, and classified regular or chaotic by the test of
-        :func:`attitude.lyapunov.lyapunov_exponent`: the finite-time Lyapunov exponent
+        :func:`attitude.analysis.lyapunov.lyapunov_exponent`: the finite-time Lyapunov exponent
         (Benettin et al. 1980, tangent vector renormalised at each periapsis, metric
         ``(delta theta, delta rate / n)``) is compared with that of a regular control,
         the same initial condition on a circular orbit (an integrable pendulum), and the

@@ -10,7 +10,7 @@ of the long axis (moment ``A``) from the periapsis direction, the spin axis (mom
     \qquad \omega_0^2 = 3\,\frac{B - A}{C}
 
 (Goldreich & Peale 1966; Wisdom, Peale & Mignard 1984, eq. 1; Murray & Dermott 1999,
-eq. 5.16).  This is the gravity-gradient torque of :class:`attitude.torques.GravityGradient`
+eq. 5.16).  This is the gravity-gradient torque of :class:`attitude.model.torques.GravityGradient`
 about the ``C`` axis, ``3 mu / (2 r^3) (B - A) sin 2 (f - theta)``, divided by ``C n^2``.
 
 The tangent (variational) equation
@@ -34,8 +34,8 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..errors import SpinOrbitError
-from ..orbit import solve_kepler
+from ..foundations.errors import SpinOrbitError
+from ..model.orbit import solve_kepler
 from .resonances import cayley_coefficient
 
 __all__ = ["planar_rhs", "advance", "stroboscopic_map", "periodic_orbit", "TWO_PI"]

@@ -36,7 +36,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..errors import SpinOrbitError
+from ..foundations.errors import SpinOrbitError
 
 __all__ = ["Resonance", "cayley_coefficient", "cayley_series", "resonance_list",
            "overlap_parameter"]

@@ -32,12 +32,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..ephemeris import write_atomically
-from ..errors import SpinOrbitError
-from ..orbit import KeplerOrbit
-from ..plot import agg_figure
-from ..quantities import to_si
-from ..torques import GravityGradient, SumTorque
+from ..app.plot import agg_figure
+from ..foundations.errors import SpinOrbitError
+from ..foundations.quantities import to_si
+from ..model.ephemeris import write_atomically
+from ..model.orbit import KeplerOrbit
+from ..model.torques import GravityGradient, SumTorque
 from .libration import long_axis_angle, measure_libration
 from .model import SpinOrbit
 from .planar import periodic_orbit
@@ -51,7 +51,7 @@ _GRID_SCHEMA = {"oneOf": [
      "required": ["min", "max", "count"], "additionalProperties": False},
 ]}
 #: JSON Schema of the ``[section]`` table (declared in
-#: :data:`attitude.scenario_spec.SCENARIO`; :func:`parse_section` checks the same keys).
+#: :data:`attitude.app.scenario_spec.SCENARIO`; :func:`parse_section` checks the same keys).
 SECTION_SCHEMA = {
     "type": "object",
     "description": ("Spin-orbit surface of section (attitude section): grid of initial "
@@ -247,7 +247,7 @@ def expectation_values(scenario, ephemeris) -> dict:
 
     Examples
     --------
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> sc = load_scenario("scenarios/phobos_libration.toml")    # expects 1:1 and 1.14 deg
     >>> so = spin_orbit_of(sc.body, sc.torques)
     >>> eph = so.propagate(np.linspace(0.0, so.orbit.period, 33))  # one orbit, locked

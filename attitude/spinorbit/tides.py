@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import math
 
-from ..errors import SpinOrbitError
-from ..quantities import to_si
+from ..foundations.errors import SpinOrbitError
+from ..foundations.quantities import to_si
 
 __all__ = ["G", "love_number_k2", "despinning_time"]
 

@@ -4,7 +4,8 @@ SI floats out; epochs in, astropy ``Time`` out.
 Every number with a unit that enters ``attitude`` (scenario files, torque tables, orbits,
 shape models, events, the times and steps of :func:`attitude.propagate`) goes through
 :func:`to_si`, and every epoch through :func:`to_time`, so that ``"2 1/s"`` means the same
-thing everywhere and a bad value gets the same keyed :class:`~attitude.errors.QuantityError`.
+thing everywhere and a bad value gets the same keyed
+:class:`~attitude.foundations.errors.QuantityError`.
 
 Accepted forms
 --------------
@@ -96,7 +97,7 @@ def read_unit(text, *, key=None, like=None, error=QuantityError) -> u.UnitBase:
     like : str or astropy unit, optional
         A unit it must convert to (same dimension; Hz counts cycles as in :func:`to_si`).
     error : type
-        The :class:`~attitude.errors.AttitudeError` subclass to raise.
+        The :class:`~attitude.foundations.errors.AttitudeError` subclass to raise.
 
     Examples
     --------
@@ -224,8 +225,9 @@ def to_si(value, unit, *, key: str | None = None, shape=None, positive: bool = F
     bounds : (low, high), optional
         Require ``low <= value <= high`` (in ``unit``; ``None`` for an open side).
     error : type
-        The :class:`~attitude.errors.AttitudeError` subclass raised (default
-        :class:`~attitude.errors.QuantityError`); constructed as ``error(message, key=key)``.
+        The :class:`~attitude.foundations.errors.AttitudeError` subclass raised (default
+        :class:`~attitude.foundations.errors.QuantityError`); constructed as ``error(message,
+        key=key)``.
     name : str, optional
         Older spelling of ``key``.
 
@@ -367,7 +369,7 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
     key : str, optional
         The field, named by the error.
     error : type
-        The :class:`~attitude.errors.AttitudeError` subclass raised.
+        The :class:`~attitude.foundations.errors.AttitudeError` subclass raised.
     precision : int or None
         Decimal places of the seconds in the time's text forms (default 9; None:
         astropy's default).

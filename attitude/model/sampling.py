@@ -16,10 +16,10 @@ import numpy as np
 from astropy import units as u
 from scipy.spatial.transform import Rotation
 
-from . import quaternion as quat
-from .errors import InvalidStateError
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidStateError
+from ..foundations.quantities import to_si
 from .freebody import diagnose_many
-from .quantities import to_si
 from .state import direction_frame, spin_axis_quaternion
 
 __all__ = ["MODELS", "DEFAULTS", "DIRECTION_SIGMA", "DIRECTION_PARAMETERS", "draw",
@@ -219,7 +219,7 @@ def tumbling_state(angular_momentum_ra, angular_momentum_dec, energy_ratio, rati
 
     Examples
     --------
-    >>> from attitude.sampling import tumbling_state
+    >>> from attitude.model.sampling import tumbling_state
     >>> m, q, w, bad = tumbling_state(4.36, -1.31, 1.024, 0.61, 0.965, 98568.0)
     >>> m.round(3).tolist(), bad
     ([[0.61, 0.965, 1.0]], {})
@@ -272,7 +272,7 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
                moment_c=1.0):
     """Principal-axis spins about C along (RA, Dec) at ``spin_rate`` (rad/s), rotated by
     ``rotation_angle`` about the spin axis from the convention of
-    :func:`attitude.state.spin_axis_quaternion` (vectorised; SI).
+    :func:`attitude.model.state.spin_axis_quaternion` (vectorised; SI).
 
     Returns moments (N, 3), quaternion (N, 4) principal -> inertial, omega (N, 3) and
     invalid ``{index: reason}``.
@@ -280,7 +280,7 @@ def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.
     Examples
     --------
     >>> import numpy as np
-    >>> from attitude.sampling import spin_state
+    >>> from attitude.model.sampling import spin_state
     >>> m, q, w, bad = spin_state(0.0, np.pi / 2, 2 * np.pi / 3600, 0.8, 0.9)
     >>> w.round(6).tolist()                          # one turn an hour about C
     [[0.0, 0.0, 0.001745]]

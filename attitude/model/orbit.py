@@ -41,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .errors import OrbitError
-from .quantities import to_si
+from ..foundations.errors import OrbitError
+from ..foundations.quantities import to_si
 
 __all__ = [
     "KeplerOrbit",
@@ -80,7 +80,7 @@ def mean_from_eccentric(E, e):
 
     Examples
     --------
-    >>> from attitude.orbit import mean_from_eccentric, solve_kepler
+    >>> from attitude.model.orbit import mean_from_eccentric, solve_kepler
     >>> round(float(solve_kepler(mean_from_eccentric(1.2, 0.3), 0.3)), 12)
     1.2
     """
@@ -134,7 +134,7 @@ def solve_kepler(M, e, *, max_iter: int = 50):
     ``E = 220.512 074 767 522 deg``:
 
     >>> import numpy as np
-    >>> from attitude.orbit import solve_kepler
+    >>> from attitude.model.orbit import solve_kepler
     >>> float(np.degrees(solve_kepler(np.radians(235.4), 0.4)))
     220.512074767522...
     """
@@ -215,7 +215,7 @@ def solve_kepler_scalar(M: float, e: float, max_iter: int = 50) -> float:
     Examples
     --------
     >>> import math
-    >>> from attitude.orbit import solve_kepler_scalar
+    >>> from attitude.model.orbit import solve_kepler_scalar
     >>> E = solve_kepler_scalar(1.0, 0.3)
     >>> abs(E - 0.3 * math.sin(E) - 1.0) < 1e-15
     True
@@ -306,7 +306,7 @@ class KeplerOrbit:
 
     Examples
     --------
-    >>> from attitude.orbit import KeplerOrbit
+    >>> from attitude.model.orbit import KeplerOrbit
     >>> leo = KeplerOrbit.from_elements(mu="3.986004418e14 m3/s2", a="7000 km", e=0.0)
     >>> round(leo.period / 60, 3)          # minutes
     97.142
@@ -418,7 +418,7 @@ class KeplerOrbit:
 
         Examples
         --------
-        >>> from attitude.orbit import KeplerOrbit
+        >>> from attitude.model.orbit import KeplerOrbit
         >>> kind, values = KeplerOrbit(mu=3.986004418e14, a=7.0e6).compiled_parameters()
         >>> kind, values["P"]
         ('kepler', array([1., 0., 0.]))
@@ -511,7 +511,7 @@ class TabulatedPath:
     Examples
     --------
     >>> import numpy as np
-    >>> from attitude.orbit import TabulatedPath
+    >>> from attitude.model.orbit import TabulatedPath
     >>> t = np.linspace(0.0, 100.0, 11)
     >>> path = TabulatedPath(t, np.stack([7e6 + t, 0 * t, 0 * t], axis=-1))
     >>> path.position(55.0)
@@ -567,7 +567,7 @@ class TabulatedPath:
         Examples
         --------
         >>> import numpy as np
-        >>> from attitude.orbit import TabulatedPath
+        >>> from attitude.model.orbit import TabulatedPath
         >>> t = np.linspace(0.0, 100.0, 11)
         >>> path = TabulatedPath(t, np.stack([7e6 + t, 0 * t, 0 * t], axis=-1))
         >>> kind, values = path.compiled_parameters((0.0, 50.0))
@@ -595,7 +595,7 @@ class CallablePath:
     Examples
     --------
     >>> import numpy as np
-    >>> from attitude.orbit import CallablePath
+    >>> from attitude.model.orbit import CallablePath
     >>> path = CallablePath(lambda t: np.stack([np.cos(t), np.sin(t), 0 * t], -1) * 7e6)
     >>> path.position(0.0)
     array([7000000.,       0.,       0.])
@@ -637,7 +637,7 @@ class ConstantPosition:
 
     Examples
     --------
-    >>> from attitude.orbit import ConstantPosition
+    >>> from attitude.model.orbit import ConstantPosition
     >>> ConstantPosition([7e6, 0, 0]).position([0.0, 1.0]).shape
     (2, 3)
     """
@@ -657,7 +657,7 @@ class ConstantPosition:
 
         Examples
         --------
-        >>> from attitude.orbit import ConstantPosition
+        >>> from attitude.model.orbit import ConstantPosition
         >>> ConstantPosition([7e6, 0, 0]).compiled_parameters()
         ('fixed', {'position': array([7000000.,       0.,       0.])})
         """
@@ -676,7 +676,7 @@ def as_path(obj):
 
     Examples
     --------
-    >>> from attitude.orbit import as_path
+    >>> from attitude.model.orbit import as_path
     >>> as_path([7e6, 0.0, 0.0])
     ConstantPosition([7000000.0, 0.0, 0.0])
     """

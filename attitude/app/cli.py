@@ -20,23 +20,23 @@ import traceback
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from .classify import classification_json, classify, format_classification
-from .ephemeris import Ephemeris, write_atomically
-from .errors import AttitudeError, PropagationError
-from .fitting import fit, sample_posterior
-from .fitting.config import fitted_scenario
-from .fitting.plot import corner_figure, residual_figure
-from .formats.aem import convert
-from .formats.spice import convert_to_ck
-from .photometry.config import run_lightcurve  # photometry (issue 15)
-from .photometry.plot import save_lightcurve_figures  # photometry (issue 15)
+from ..analysis.classification import classification_json, classify, format_classification
+from ..analysis.statistics import classify_ensemble, regime_fractions
+from ..fitting import fit, sample_posterior
+from ..fitting.config import fitted_scenario
+from ..fitting.plot import corner_figure, residual_figure
+from ..formats.aem import convert
+from ..formats.spice import convert_to_ck
+from ..foundations.errors import AttitudeError, PropagationError
+from ..model.ephemeris import Ephemeris, write_atomically
+from ..photometry.config import run_lightcurve  # photometry (issue 15)
+from ..photometry.plot import save_lightcurve_figures  # photometry (issue 15)
+from ..propagation.cluster import local_cluster
+from ..propagation.events import event_table
+from ..spinorbit import section as spinorbit_section  # attitude section (spin-orbit wing)
+from ..version import __version__
 from .plot import save_figures
-from .propagation.cluster import local_cluster
-from .propagation.events import event_table
 from .scenario import load_scenario, run_scenario
-from .spinorbit import section as spinorbit_section  # attitude section (spin-orbit wing)
-from .statistics import classify_ensemble, regime_fractions
-from .version import __version__
 
 __all__ = ["main"]
 

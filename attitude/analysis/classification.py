@@ -11,11 +11,11 @@ Every threshold is a field of :class:`Thresholds` (documented there and in
 ``docs/diagnostics.md``), and each result says which one decided (``decided_by``).
 
 The classification of a window rests on *osculating* torque-free quantities computed
-from every sample's body rates (:func:`attitude.diagnostics.invariants`): the signed
+from every sample's body rates (:func:`attitude.analysis.diagnostics.invariants`): the signed
 separatrix distance ``m1`` (sign of ``L^2 - 2EB``) and the largest nutation angle of the
 torque-free cycle through the sample.  They are exact for torque-free motion and
 follow a perturbed motion sample by sample; measured periods and angles come from the
-series themselves (:mod:`attitude.diagnostics`).
+series themselves (:mod:`attitude.analysis.diagnostics`).
 """
 
 from __future__ import annotations
@@ -30,7 +30,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 from scipy.special import ndtr
 
-from .body import symmetry_of
+from ..foundations.errors import ClassificationError
+from ..foundations.quantities import to_si
+from ..model.body import symmetry_of
+from ..model.ephemeris import Ephemeris
+from ..model.regimes import PERIOD_KEYS, REGIMES, Thresholds
+from ..model.state import AttitudeState
 from .diagnostics import (
     DiagnosticsError,
     InsufficientDataError,
@@ -43,12 +48,7 @@ from .diagnostics import (
     principal_series,
     reference_axis_for,
 )
-from .ephemeris import Ephemeris
-from .errors import ClassificationError
 from .lyapunov import LyapunovResult, lyapunov_exponent
-from .quantities import to_si
-from .regimes import PERIOD_KEYS, REGIMES, Thresholds
-from .state import AttitudeState
 
 __all__ = [
     "Window",
@@ -102,7 +102,7 @@ class Transition:
 
     Examples
     --------
-    >>> from attitude.classify import Transition
+    >>> from attitude.analysis.classification import Transition
     >>> Transition(epoch=120.0, before="LAM", after="SAM", quantity="m1", threshold=0.0)
     Transition(epoch=120.0, before='LAM', after='SAM', quantity='m1', threshold=0.0)
     """
@@ -496,7 +496,7 @@ def initial_state(eph: Ephemeris, body_index: int | None = None) -> AttitudeStat
     >>> from scipy.spatial.transform import Rotation
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
-    >>> from attitude.classify import initial_state
+    >>> from attitude.analysis.classification import initial_state
     >>> eph = att.propagate(body, state, [100.0, 200.0])
     >>> s = initial_state(eph)
     >>> bool(np.allclose(s.omega_body, eph.dataset["angular_velocity"].values[0]))
@@ -542,7 +542,7 @@ def classify(eph: Ephemeris, *, window=None, body_index: int | None = None,
     lyapunov_options : dict, optional
         Extra keywords for :func:`lyapunov_exponent`.
     require_periods : bool
-        Raise :class:`~attitude.errors.InsufficientDataError` when the periods of
+        Raise :class:`~attitude.foundations.errors.InsufficientDataError` when the periods of
         the regime cannot be measured (less than one cycle); otherwise leave them out.
 
     Returns
@@ -561,7 +561,7 @@ def classify(eph: Ephemeris, *, window=None, body_index: int | None = None,
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.classify import classify
+    >>> from attitude.analysis.classification import classify
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> c = classify(att.propagate(body, state, np.linspace(0.0, 3000.0, 1501)))
@@ -693,7 +693,7 @@ def format_classification(c: Classification) -> str:
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.classify import classify, format_classification
+    >>> from attitude.analysis.classification import classify, format_classification
     >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
     >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.0, 0.0, 0.5])
     >>> print(format_classification(classify(att.propagate(body, state,
@@ -777,7 +777,7 @@ def classification_json(c: Classification, *, windows: bool = False) -> dict:
     --------
     >>> import json, numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.classify import classify, classification_json
+    >>> from attitude.analysis.classification import classify, classification_json
     >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
     >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.0, 0.0, 0.5])
     >>> d = classification_json(classify(att.propagate(body, state, np.linspace(0, 100, 201))))

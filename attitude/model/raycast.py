@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import MissingDependencyError
+from ..foundations.errors import MissingDependencyError
 
 __all__ = ["Occluder", "load_embree", "OFFSET_RTOL"]
 

@@ -1,7 +1,7 @@
 """Scenario files (TOML): a body, an initial state, a propagation, outputs and
 expectations, validated before any work is done.
 
-Every problem is reported as a :class:`~attitude.errors.ScenarioError` whose message is
+Every problem is reported as a :class:`~attitude.foundations.errors.ScenarioError` whose message is
 one line naming the file and the key (``scenarios/x.toml: state.omega_body: ...``).
 See the scenario section of the docs for the full format.
 """
@@ -24,32 +24,37 @@ from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
-from . import statistics
-from .body import MassProperties, RigidBody
-from .classify import classify
-from .diagnostics import DIAGNOSTIC_VARIABLES, SCALAR_DIAGNOSTICS, add_diagnostics
-from .ephemeris import Ephemeris, relative_drifts
-from .errors import AttitudeError, DiagnosticsError, InvalidBodiesWarning, ScenarioError
-from .fitting.config import parse_observations
-from .freebody import diagnose
-from .photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
-from .photometry.config import parse_photometry
-from .population import Ensemble
-from .propagation.batch import STATUS_FAILED, STATUS_OK
-from .propagation.events import nutation_crossing
-from .propagation.propagator import propagate
-from .quantities import read_unit
-from .regimes import PERIOD_KEYS
-from .sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
-from .sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
-from .sampling import MODELS
+from ..analysis import statistics
+from ..analysis.classification import classify
+from ..analysis.diagnostics import DIAGNOSTIC_VARIABLES, SCALAR_DIAGNOSTICS, add_diagnostics
+from ..analysis.spindown import spin_trend
+from ..fitting.config import parse_observations
+from ..foundations.errors import (
+    AttitudeError,
+    DiagnosticsError,
+    InvalidBodiesWarning,
+    ScenarioError,
+)
+from ..foundations.quantities import read_unit
+from ..foundations.spec import Key, Table, json_schema, markdown, validate
+from ..model.body import MassProperties, RigidBody
+from ..model.ephemeris import Ephemeris, relative_drifts
+from ..model.freebody import diagnose
+from ..model.population import Ensemble
+from ..model.regimes import PERIOD_KEYS
+from ..model.sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
+from ..model.sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
+from ..model.sampling import MODELS
+from ..model.state import AttitudeState, check_frame, spin_axis_quaternion
+from ..model.tables import COLUMNS
+from ..model.torques import BuildContext, from_config
+from ..photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
+from ..photometry.config import parse_photometry
+from ..propagation.batch import STATUS_FAILED, STATUS_OK
+from ..propagation.events import nutation_crossing
+from ..propagation.propagator import propagate
+from ..spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
 from .scenario_spec import CONSERVATION_KEYS, EXPECT_KEYS, REDUCTIONS, SCENARIO, SPIN_EXPECT_KEYS
-from .spec import Key, Table, json_schema, markdown, validate
-from .spindown import spin_trend
-from .spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
-from .state import AttitudeState, check_frame, spin_axis_quaternion
-from .tables import COLUMNS
-from .torques import BuildContext, from_config
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
            "spin_axis_state", "known_variables", "SCHEMA", "EXPECT_KEYS", "SCENARIO",
@@ -58,7 +63,7 @@ __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expe
 _BODY_KINDS = ("principal_moments", "inertia", "shape", "parts")
 _PART_PLACEMENT = ("primitive", "offset", "orientation")
 
-#: Allowed keys of each table (derived from :data:`attitude.scenario_spec.SCENARIO`, the one
+#: Allowed keys of each table (derived from :data:`attitude.app.scenario_spec.SCENARIO`, the one
 #: declaration of the format).
 SCHEMA: dict[str, Any] = {
     k.name: (k.table.names() if k.kind == "table" and k.name != "expect" else
@@ -152,7 +157,7 @@ def _read_toml(path: Path) -> dict:
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file.
 
-    The file is checked against :data:`attitude.scenario_spec.SCENARIO` (keys, types,
+    The file is checked against :data:`attitude.app.scenario_spec.SCENARIO` (keys, types,
     lengths, units, signs, dates), then the physics (mass properties, states, torques) is
     built; nothing is propagated.
 
@@ -357,7 +362,7 @@ def _parts(r: _Reader, parts) -> list[MassProperties]:
 
 
 def _rotation(r: _Reader, table: dict, key: str) -> Rotation:
-    """A validated :data:`~attitude.scenario_spec.ROTATION` table -> scipy Rotation."""
+    """A validated :data:`~attitude.app.scenario_spec.ROTATION` table -> scipy Rotation."""
     if "euler" in table:
         try:
             return Rotation.from_euler(table["euler"], table["angles"])
@@ -474,12 +479,12 @@ class RunResult:
     note: str = ""
     dataset: Any = None
     """The dataset the ``[expect]`` variables were read from (the ephemeris dataset, with
-    the :func:`~attitude.diagnostics.add_diagnostics` variables when needed), or None."""
+    the :func:`~attitude.analysis.diagnostics.add_diagnostics` variables when needed), or None."""
     ensemble: dict | None = None
     """Summary of an ensemble run (:func:`ensemble_summary`), or None."""
     spin: Any = None
     """The spin period at the ends of the run and its trend
-    (:class:`attitude.spindown.SpinTrend`), or None (an ensemble, a body at rest)."""
+    (:class:`attitude.analysis.spindown.SpinTrend`), or None (an ensemble, a body at rest)."""
 
     @property
     def ok(self) -> bool:
@@ -531,7 +536,8 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
 
     A torque-free run is described by the analytic :func:`attitude.diagnose` of its
     initial state.  A run with torques is classified from its ephemeris by
-    :func:`attitude.classify` with the finite-time Lyapunov test (``chaotic``), so its
+    :func:`attitude.analysis.classification` with the finite-time Lyapunov test (``chaotic``), so
+    its
     regime and periods are measured ones.  ``write_outputs=False`` writes no file (what
     ``attitude check`` does).  An ensemble scenario runs on ``client`` (a dask client)
     when one is given, else in this process (:func:`ensemble_summary`).
@@ -677,8 +683,8 @@ def known_variables() -> dict[str, tuple[str, bool]]:
     """Variables ``[expect.variables]`` may name: ``{name: (units, is_time_series)}``.
 
     The base dataset (``quaternion``, ``angular_velocity``, ``angular_momentum``,
-    ``kinetic_energy``), the time series of :func:`attitude.diagnostics.add_diagnostics`
-    (:data:`~attitude.diagnostics.DIAGNOSTIC_VARIABLES`) and its scalars (conservation
+    ``kinetic_energy``), the time series of :func:`attitude.analysis.diagnostics.add_diagnostics`
+    (:data:`~attitude.analysis.diagnostics.DIAGNOSTIC_VARIABLES`) and its scalars (conservation
     figures, ``attitude_noise``, measured periods ``period_<key>`` and their
     ``period_<key>_uncertainty``).
 
@@ -856,9 +862,9 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
 
     ``diagnosis`` (:func:`attitude.diagnose` of the initial state) gives the nutation range
     of a torque-free run; ``dataset`` (the run's ephemeris dataset, with the variables of
-    :func:`attitude.diagnostics.add_diagnostics` when :func:`needs_dataset` says so) the
+    :func:`attitude.analysis.diagnostics.add_diagnostics` when :func:`needs_dataset` says so) the
     nutation range of a run with torques (extremes of ``nutation_angle`` over the run) and
-    the ``[expect.variables]`` values; ``spin`` (:class:`attitude.spindown.SpinTrend`)
+    the ``[expect.variables]`` values; ``spin`` (:class:`attitude.analysis.spindown.SpinTrend`)
     the spin period and its trend.  Without them those entries get ``got = None``
     (a failure).
 
@@ -945,14 +951,15 @@ _SCHEMA_DESCRIPTION = (
     "torques, events, outputs and expectations (docs/scenarios.md). TOML maps to JSON one to "
     "one; editors with a TOML language server (e.g. Taplo, Even Better TOML) validate against "
     "this schema with a first-line comment '#:schema ./docs/scenario.schema.json'. Generated "
-    "by 'python -m attitude.scenario --schema' from attitude.scenario_spec, the declaration "
+    "by 'python -m attitude.app.scenario --schema' from attitude.app.scenario_spec, the "
+    "declaration "
     "the loader validates with; the loader also checks what a schema cannot (units, "
     "physical mass properties, quaternion norms, dates).")
 
 
 def scenario_schema() -> dict:
     """The JSON Schema (draft 2020-12) of scenario files, from
-    :data:`attitude.scenario_spec.SCENARIO` (what ``docs/scenario.schema.json`` holds).
+    :data:`attitude.app.scenario_spec.SCENARIO` (what ``docs/scenario.schema.json`` holds).
 
     Examples
     --------
@@ -966,7 +973,7 @@ def scenario_schema() -> dict:
 
 def scenario_reference() -> str:
     """The key reference of scenario files as markdown (the generated section of
-    docs/scenarios.md), from :data:`attitude.scenario_spec.SCENARIO`.
+    docs/scenarios.md), from :data:`attitude.app.scenario_spec.SCENARIO`.
 
     Examples
     --------
@@ -979,8 +986,8 @@ def scenario_reference() -> str:
 
 def _main(argv=None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m attitude.scenario",
-        description="Print the scenario format generated from attitude.scenario_spec.")
+        prog="python -m attitude.app.scenario",
+        description="Print the scenario format generated from attitude.app.scenario_spec.")
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--schema", action="store_true", help="the JSON Schema")
     group.add_argument("--reference", action="store_true", help="the markdown key reference")

@@ -30,8 +30,8 @@ import numpy as np
 import xarray as xr
 from astropy.time import Time
 
-from attitude.ephemeris import file_encoding, write_atomically
-from attitude.errors import LightcurveFormatError
+from attitude.foundations.errors import LightcurveFormatError
+from attitude.model.ephemeris import file_encoding, write_atomically
 from attitude.version import __version__
 
 __all__ = ["Lightcurve"]

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..foundations.errors import InvalidInertiaError, InvalidStateError
+from ..foundations.quantities import to_si
+from ..foundations.spec import Key, Table
 from .body import diagonal_inertia
-from .errors import InvalidInertiaError, InvalidStateError
-from .quantities import to_si
-from .spec import Key, Table
 
 __all__ = ["ensemble_columns", "read_table", "COLUMNS"]
 

@@ -8,8 +8,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from ..foundations.errors import ClassificationError
 from .body import SYMMETRY_RTOL
-from .errors import ClassificationError
 
 __all__ = ["REGIMES", "PERIOD_KEYS", "Thresholds"]
 
@@ -38,7 +38,7 @@ class Thresholds:
         ``at-rest`` when ``|omega| <=`` this in every sample of a window, rad/s.
     symmetry_rtol : float
         Moments equal within ``symmetry_rtol * C``: ``axisymmetric`` / ``spherical``
-        bodies (default :data:`attitude.body.SYMMETRY_RTOL`, as ``att.diagnose``).
+        bodies (default :data:`attitude.model.body.SYMMETRY_RTOL`, as ``att.diagnose``).
     principal_axis_angle : float
         Principal-axis spin (``PA-short``/``PA-long``) when the largest angle between
         ``L`` and the axis over the osculating nutation cycle is at most this, rad.
@@ -53,7 +53,7 @@ class Thresholds:
     noise_angle : float
         Attitude-noise scale, rad: the confidence is multiplied by
         ``exp(-noise / noise_angle)`` with ``noise`` from
-        :func:`attitude.diagnostics.attitude_noise`.
+        :func:`attitude.analysis.diagnostics.attitude_noise`.
     window_cycles : float
         Default window length in osculating polhode periods (median over the run).
     window_overlap : float
@@ -70,7 +70,7 @@ class Thresholds:
 
     Examples
     --------
-    >>> from attitude.regimes import Thresholds
+    >>> from attitude.model.regimes import Thresholds
     >>> t = Thresholds()
     >>> Thresholds(separatrix=2 * t.separatrix).separatrix == 2 * t.separatrix
     True

@@ -36,8 +36,8 @@ from dataclasses import dataclass, field
 import astropy.units as u
 import numpy as np
 
-from attitude.errors import InvalidInertiaError, ShapeModelError
-from attitude.quantities import read_unit, to_si
+from attitude.foundations.errors import InvalidInertiaError, ShapeModelError
+from attitude.foundations.quantities import read_unit, to_si
 
 __all__ = ["Polyhedron"]
 
@@ -152,7 +152,7 @@ class Polyhedron:
     A unit cube, two triangles per side, outward normals:
 
     >>> import numpy as np
-    >>> from attitude.shape import Polyhedron
+    >>> from attitude.model.shape import Polyhedron
     >>> vertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
     ...             [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
     >>> faces = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
@@ -259,7 +259,7 @@ class Polyhedron:
         Examples
         --------
         >>> import os, tempfile
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> text = '''# unit cube, quads, 1-based indices
         ... v 0 0 0
         ... v 1 0 0
@@ -336,7 +336,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> sphere = Polyhedron.ellipsoid(1.0, 1.0, 1.0, subdivisions=3)
         >>> len(sphere.faces), round(sphere.volume / (4 / 3 * 3.141592653589793), 3)
         (1280, 0.991)
@@ -388,7 +388,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> shape = Polyhedron.ellipsoid_from_moments([0.61, 0.965, 1.0], subdivisions=1)
         >>> ax = shape.vertices.max(axis=0)
         >>> [round(float(x), 3) for x in ax / ax[0]]
@@ -415,7 +415,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         >>> tet.face_areas.round(4)
@@ -429,7 +429,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         >>> tet.face_normals[0]
@@ -444,7 +444,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         >>> tet.face_centroids[3].round(4)
@@ -457,7 +457,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> Polyhedron.ellipsoid(3, 2, 1, subdivisions=2).is_convex()
         True
         """
@@ -492,7 +492,7 @@ class Polyhedron:
 
         Examples
         --------
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         >>> tet.inertia_per_density() * 480   # 1/80 on the diagonal, 1/480 off it
@@ -530,7 +530,7 @@ class Polyhedron:
         Examples
         --------
         >>> import astropy.units as u
-        >>> from attitude.shape import Polyhedron
+        >>> from attitude.model.shape import Polyhedron
         >>> tet = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         ...                  [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         >>> mass, com, inertia = tet.mass_properties(1.2 * u.g / u.cm**3)
@@ -706,7 +706,7 @@ def _check_topology(faces: np.ndarray, n_vertices: int) -> None:
 # ---------------------------------------------------------------------------- units
 def _metres_per_unit(length_unit) -> float:
     """Metres per coordinate unit: a unit (``"km"``, ``u.km``) or a length (``"0.5 km"``),
-    read by :func:`attitude.quantities.to_si`."""
+    read by :func:`attitude.foundations.quantities.to_si`."""
     if isinstance(length_unit, (str, u.UnitBase)):
         try:
             length_unit = read_unit(length_unit, key="length_unit", error=ShapeModelError)

@@ -127,7 +127,7 @@ class ScenarioError(AttitudeError, ValueError):
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from attitude.scenario import load_scenario
+    >>> from attitude.app.scenario import load_scenario
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "sat.toml"
     >>> _ = path.write_text('''
     ... [body]
@@ -151,11 +151,11 @@ class QuantityError(AttitudeError, ValueError):
     """A number with a unit that cannot be read: unparseable text, a unit of the wrong
     dimension, the wrong shape, a non-finite or out-of-range value, a date that does not
     exist.  ``key`` names the field (``"propagation.step"``); the message says what was
-    expected and how to write it (:func:`attitude.quantities.to_si`).
+    expected and how to write it (:func:`attitude.foundations.quantities.to_si`).
 
     Examples
     --------
-    >>> from attitude.quantities import to_si
+    >>> from attitude.foundations.quantities import to_si
     >>> try:
     ...     to_si("2 m", "rad/s", key="state.omega")
     ... except QuantityError as err:
@@ -208,7 +208,7 @@ class OrbitError(AttitudeError, ValueError):
 
     Examples
     --------
-    >>> from attitude.orbit import KeplerOrbit
+    >>> from attitude.model.orbit import KeplerOrbit
     >>> try:
     ...     KeplerOrbit(mu=3.986e14, a=7e6, e=1.5)
     ... except OrbitError as err:
@@ -224,7 +224,7 @@ class TorqueConfigError(AttitudeError, ValueError):
 
     Examples
     --------
-    >>> from attitude.torques import from_config
+    >>> from attitude.model.torques import from_config
     >>> try:
     ...     from_config({"type": "constant", "torq": [0, 0, 1e-6]})
     ... except TorqueConfigError as err:
@@ -242,7 +242,7 @@ class DiagnosticsError(AttitudeError, ValueError):
     >>> from scipy.spatial.transform import Rotation
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
-    >>> from attitude.diagnostics import measure_periods
+    >>> from attitude.analysis.diagnostics import measure_periods
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
     >>> try:
     ...     measure_periods(eph, reference_axis=2)
@@ -262,7 +262,7 @@ class InsufficientDataError(DiagnosticsError):
     >>> from scipy.spatial.transform import Rotation
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
-    >>> from attitude.diagnostics import measure_periods
+    >>> from attitude.analysis.diagnostics import measure_periods
     >>> try:
     ...     measure_periods(att.propagate(body, state, [0.0, 5.0, 10.0]))
     ... except InsufficientDataError as err:
@@ -279,7 +279,7 @@ class ClassificationError(AttitudeError, ValueError):
 
     Examples
     --------
-    >>> from attitude.regimes import Thresholds
+    >>> from attitude.model.regimes import Thresholds
     >>> try:
     ...     Thresholds(softness=0)
     ... except ClassificationError as err:
@@ -290,7 +290,7 @@ class ClassificationError(AttitudeError, ValueError):
 
 class SpinOrbitError(AttitudeError, ValueError):
     """A spin-orbit problem that cannot be set up or solved: an orbit that is not a
-    :class:`~attitude.orbit.KeplerOrbit`, a body without ``B > A``, a resonance whose
+    :class:`~attitude.model.orbit.KeplerOrbit`, a body without ``B > A``, a resonance whose
     periodic orbit does not converge, a bad ``[section]`` table.
 
     Examples
@@ -369,7 +369,7 @@ class WriterError(AttitudeError, RuntimeError):
 
     Examples
     --------
-    >>> from attitude.ephemeris import AtomicFiles
+    >>> from attitude.model.ephemeris import AtomicFiles
     >>> try:
     ...     AtomicFiles("out.nc", "out.nc")
     ... except WriterError as err:

@@ -31,9 +31,9 @@ from os import PathLike
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from . import quaternion as quat
-from .errors import InvalidInertiaError, InvalidStateError
-from .quantities import to_si
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidInertiaError, InvalidStateError
+from ..foundations.quantities import to_si
 from .shape import Polyhedron
 
 __all__ = [

@@ -7,19 +7,19 @@ one of, needs, excludes).  From it come
 
 - :func:`validate`: the checks a loader runs before any work (unknown keys with a
   did-you-mean, missing keys, wrong types, quantities read by
-  :func:`attitude.quantities.to_si` with their unit, shape and sign, epochs read by
-  :func:`attitude.quantities.to_time`), each failure one keyed error, and the values
+  :func:`attitude.foundations.quantities.to_si` with their unit, shape and sign, epochs read by
+  :func:`attitude.foundations.quantities.to_time`), each failure one keyed error, and the values
   converted to SI;
 - :func:`json_schema`: the JSON Schema (draft 2020-12) that editors validate against;
 - :func:`markdown`: the key reference of the documentation.
 
-The scenario file is declared with these in :mod:`attitude.scenario` (``SCENARIO``); torque
-tables in :mod:`attitude.torques` (``TORQUE_TABLES``).  A new table is a new
+The scenario file is declared with these in :mod:`attitude.app.scenario` (``SCENARIO``); torque
+tables in :mod:`attitude.model.torques` (``TORQUE_TABLES``).  A new table is a new
 :class:`Table` added there.
 
 Examples
 --------
->>> from attitude.spec import Key, Table, validate
+>>> from attitude.foundations.spec import Key, Table, validate
 >>> prop = Table("propagation", (
 ...     Key("duration", "quantity", unit="s", required=True, positive=True,
 ...         doc="how long to propagate"),
@@ -61,7 +61,7 @@ class Key:
     kind : str
         One of :data:`KINDS`: ``"string"`` (``choices`` to restrict it), ``"integer"``,
         ``"number"`` (a plain float, e.g. a tolerance), ``"boolean"``, ``"quantity"``
-        (``unit``, ``shape``; see :func:`attitude.quantities.to_si`), ``"unit"`` (a unit
+        (``unit``, ``shape``; see :func:`attitude.foundations.quantities.to_si`), ``"unit"`` (a unit
         string convertible to ``unit``), ``"time"`` (an ISO 8601 epoch; its scale is the
         sibling key ``scale_key``), ``"table"`` (a sub-table, ``table``), ``"tables"`` (an
         array of tables: ``table``, or ``variants`` chosen by the key ``discriminator``),
@@ -296,7 +296,7 @@ def validate(doc, table: Table, *, where: str = "", path=None,
     path : str, optional
         The file, named by the error.
     error : type
-        The :class:`~attitude.errors.AttitudeError` subclass raised, as
+        The :class:`~attitude.foundations.errors.AttitudeError` subclass raised, as
         ``error(message, key=..., path=...)``.
 
     Returns

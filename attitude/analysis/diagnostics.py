@@ -1,12 +1,12 @@
 r"""Diagnostics of an attitude ephemeris: Euler angles in the angular-momentum frame,
 nutation, excitation, measured periods, conservation drift.
 
-Everything here reads an :class:`~attitude.ephemeris.Ephemeris` (from any propagator or
+Everything here reads an :class:`~attitude.model.ephemeris.Ephemeris` (from any propagator or
 from a file) and never propagates.  The formulas, the period-measurement method and its
 accuracy are in ``docs/diagnostics.md``; equation numbers ``(D n)`` refer to it.
 
 Conventions: principal moments ``A <= B <= C``; the principal frame carries ``A, B, C``
-on its x, y, z axes (:attr:`attitude.body.RigidBody.body_to_principal`); quaternions
+on its x, y, z axes (:attr:`attitude.model.body.RigidBody.body_to_principal`); quaternions
 scalar-last, principal (or body) -> inertial; rates in rad/s.
 
 The **angular-momentum frame** ``(X, Y, Z)`` has ``Z`` along the instantaneous inertial
@@ -34,11 +34,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipkm1
 
-from . import freebody as fb
-from . import quaternion as quat
-from .body import SYMMETRY_RTOL, RigidBody, to_principal_frame
-from .ephemeris import Ephemeris
-from .errors import DiagnosticsError, InsufficientDataError
+from ..foundations import quaternion as quat
+from ..foundations.errors import DiagnosticsError, InsufficientDataError
+from ..model import freebody as fb
+from ..model.body import SYMMETRY_RTOL, RigidBody, to_principal_frame
+from ..model.ephemeris import Ephemeris
 
 __all__ = [
     "PrincipalSeries",
@@ -95,7 +95,7 @@ class PrincipalSeries:
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import principal_series
+    >>> from attitude.analysis.diagnostics import principal_series
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -158,7 +158,7 @@ def principal_series(eph: Ephemeris, body_index: int | None = None) -> Principal
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import principal_series
+    >>> from attitude.analysis.diagnostics import principal_series
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -230,7 +230,7 @@ def invariants(omega: np.ndarray, moments) -> dict[str, np.ndarray]:
     Examples
     --------
     >>> import numpy as np
-    >>> from attitude.diagnostics import invariants
+    >>> from attitude.analysis.diagnostics import invariants
     >>> inv = invariants(np.array([0.02, 0.0, 0.1]), [0.61, 0.965, 1.0])
     >>> round(float(inv["E"]), 15), round(float(inv["L"]) ** 2, 15)   # E, |L|^2 by hand:
     (0.005122, 0.01014884)
@@ -286,7 +286,7 @@ def osculating_polhode_period(omega: np.ndarray, moments) -> np.ndarray:
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import osculating_polhode_period
+    >>> from attitude.analysis.diagnostics import osculating_polhode_period
     >>> moments, omega = [0.61, 0.965, 1.0], np.array([0.02, 0.0, 0.1])
     >>> P = float(osculating_polhode_period(omega, moments))
     >>> body = att.RigidBody.from_principal_moments(moments)
@@ -327,7 +327,7 @@ def reference_axis_for(moments, dynamic_inertia) -> int:
 
     Examples
     --------
-    >>> from attitude.diagnostics import reference_axis_for
+    >>> from attitude.analysis.diagnostics import reference_axis_for
     >>> reference_axis_for([0.61, 0.965, 1.0], 0.99)   # L^2/2E > B: short-axis mode
     3
     >>> reference_axis_for([0.61, 0.965, 1.0], 0.70)   # L^2/2E < B: long-axis mode
@@ -435,7 +435,7 @@ def momentum_frame_angles(series: PrincipalSeries, reference_axis: int = 3
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import principal_series, momentum_frame_angles
+    >>> from attitude.analysis.diagnostics import principal_series, momentum_frame_angles
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -609,7 +609,7 @@ class MeasuredPeriod:
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import measure_periods
+    >>> from attitude.analysis.diagnostics import measure_periods
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -715,7 +715,7 @@ def measure_periods(source, *, body_index: int | None = None, reference_axis: in
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import measure_periods
+    >>> from attitude.analysis.diagnostics import measure_periods
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -852,7 +852,7 @@ def conservation_drift(series: PrincipalSeries) -> dict:
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import principal_series, conservation_drift
+    >>> from attitude.analysis.diagnostics import principal_series, conservation_drift
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -899,7 +899,7 @@ def attitude_noise(series: PrincipalSeries) -> float:
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import principal_series, attitude_noise, PrincipalSeries
+    >>> from attitude.analysis.diagnostics import principal_series, attitude_noise, PrincipalSeries
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 1501))
@@ -1042,7 +1042,7 @@ def add_diagnostics(eph: Ephemeris, *, reference_axis: int | None = None,
     --------
     >>> import numpy as np, attitude as att
     >>> from scipy.spatial.transform import Rotation
-    >>> from attitude.diagnostics import add_diagnostics
+    >>> from attitude.analysis.diagnostics import add_diagnostics
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = add_diagnostics(att.propagate(body, state, np.linspace(0, 3000, 1501)))

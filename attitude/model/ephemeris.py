@@ -37,11 +37,11 @@ import xarray as xr
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
-from . import quaternion as quat
+from ..foundations import quaternion as quat
+from ..foundations.errors import EphemerisFormatError, WriterError
+from ..version import __version__
 from .body import RigidBody
-from .errors import EphemerisFormatError, WriterError
 from .state import format_epoch
-from .version import __version__
 
 __all__ = ["Ephemeris", "QUATERNION_CONVENTION", "TIME_CALENDAR", "time_attributes",
            "time_from_file", "AtomicFiles", "write_atomically"]
@@ -228,7 +228,7 @@ class Ephemeris:
         ``principal_moments`` (and ``body_name``, ``mass``) attributes set and the
         angular momentum and energy recomputed from the quaternions and rates.  For an
         ephemeris read from a file that carries none (a CCSDS AEM), so that
-        :func:`attitude.classify` and the diagnostics can use it.
+        :func:`attitude.analysis.classification` and the diagnostics can use it.
 
         Examples
         --------

@@ -7,7 +7,7 @@ models: the brightness of the facet (photometry: a diffuse + specular BRDF,
 the light on it (solar radiation pressure, the classic flat-plate model
 ``F = -P A cos(theta) [(1 - rho_s) s + 2 (rho_s cos(theta) + rho_d / 3) n]``,
 Montenbruck & Gill 2000, eq. 3.73).  :class:`Surface` assigns properties to the facets of
-a :class:`~attitude.shape.Polyhedron`.
+a :class:`~attitude.model.shape.Polyhedron`.
 
 References
 ----------
@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from attitude.errors import ShapeModelError
-from attitude.shape import Polyhedron
+from attitude.foundations.errors import ShapeModelError
+from attitude.model.shape import Polyhedron
 
 __all__ = ["OpticalProperties", "Surface"]
 
@@ -46,7 +46,7 @@ class OpticalProperties:
 
     Examples
     --------
-    >>> from attitude.surface import OpticalProperties
+    >>> from attitude.model.surface import OpticalProperties
     >>> aluminium = OpticalProperties(specular=0.6, diffuse=0.2, name="aluminium")
     >>> round(aluminium.absorbed, 12)
     0.2
@@ -96,7 +96,7 @@ class Surface:
     Examples
     --------
     >>> import attitude as att
-    >>> from attitude.surface import OpticalProperties, Surface
+    >>> from attitude.model.surface import OpticalProperties, Surface
     >>> cube = att.Polyhedron.ellipsoid(1, 1, 1, subdivisions=0)
     >>> surf = Surface.uniform(cube, OpticalProperties(0.1, 0.3))
     >>> surf.diffuse[:3]

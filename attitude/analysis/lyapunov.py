@@ -3,9 +3,9 @@ r"""Finite-time Lyapunov exponents of propagated rotations: the test for chaos.
 Two nearby trajectories (Benettin et al. 1980) are propagated with
 :func:`attitude.propagate` and renormalised at equal intervals; the exponent is
 compared with that of a regular control run (by default the same body and state
-without torques, an integrable motion).  :func:`attitude.classify` calls
+without torques, an integrable motion).  :func:`attitude.analysis.classification` calls
 :func:`lyapunov_exponent` to call a perturbed run ``chaotic`` (Hyperion, Wisdom, Peale &
-Mignard 1984); the thresholds are :class:`attitude.regimes.Thresholds`.
+Mignard 1984); the thresholds are :class:`attitude.model.regimes.Thresholds`.
 """
 
 from __future__ import annotations
@@ -17,14 +17,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from . import torques as tq
-from .body import RigidBody
-from .errors import ClassificationError
-from .propagation.propagator import propagate
-from .propagation.splitting import choose_step
-from .quantities import to_si
-from .regimes import Thresholds
-from .state import AttitudeState
+from ..foundations.errors import ClassificationError
+from ..foundations.quantities import to_si
+from ..model import torques as tq
+from ..model.body import RigidBody
+from ..model.regimes import Thresholds
+from ..model.state import AttitudeState
+from ..propagation.propagator import propagate
+from ..propagation.splitting import choose_step
 
 __all__ = ["LyapunovResult", "lyapunov_exponent"]
 
@@ -65,7 +65,7 @@ class LyapunovResult:
     >>> from scipy.spatial.transform import Rotation
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
-    >>> from attitude.lyapunov import lyapunov_exponent
+    >>> from attitude.analysis.lyapunov import lyapunov_exponent
     >>> r = lyapunov_exponent(body, state, None, 2000.0, intervals=8)
     >>> r.chaotic                         # a free rigid body is regular
     False

@@ -1,6 +1,6 @@
 r"""Figures of an attitude ephemeris (matplotlib, the optional extra ``plot``).
 
-Each function takes an :class:`~attitude.ephemeris.Ephemeris` (one body) and returns a
+Each function takes an :class:`~attitude.model.ephemeris.Ephemeris` (one body) and returns a
 :class:`matplotlib.figure.Figure`; nothing is shown or saved (``fig.savefig(...)``).
 
 * :func:`polhode` - the Binet construction: the angular velocity on the energy ellipsoid
@@ -9,7 +9,7 @@ Each function takes an :class:`~attitude.ephemeris.Ephemeris` (one body) and ret
 * :func:`herpolhode` - the tip of ``omega`` on the invariable plane (normal to ``L``).
 * :func:`body_axes` - the principal axes on the inertial unit sphere over time.
 * :func:`euler_angles` - precession ``phi``, nutation ``theta``, rotation ``psi`` (3-1-3 in
-  the angular-momentum frame, :func:`attitude.diagnostics.momentum_frame_angles`) and their
+  the angular-momentum frame, :func:`attitude.analysis.diagnostics.momentum_frame_angles`) and their
   rates against time.
 * :func:`regime_timeline` - the time-resolved regime (``classify(eph).segments``) and the
   excitation ``L^2 / (2 E B)`` over time, for perturbed runs.
@@ -20,7 +20,7 @@ raise :class:`PlotUnavailableError`.  For example::
 
     import numpy as np, attitude as att
     from scipy.spatial.transform import Rotation
-    from attitude.plot import polhode
+    from attitude.app.plot import polhode
     body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     polhode(att.propagate(body, state, np.linspace(0, 3000, 1501))).savefig("p.png")
@@ -32,17 +32,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .classify import classify
-from .diagnostics import (
+from ..analysis.classification import classify
+from ..analysis.diagnostics import (
     momentum_frame_angles,
     momentum_frame_x,
     principal_series,
     reference_axis_for,
 )
-from .errors import AttitudeError, PlotUnavailableError
-from .freebody import diagnose_many
-from .quaternion import rotate
-from .statistics import attitude_spread
+from ..analysis.statistics import attitude_spread
+from ..foundations.errors import AttitudeError, PlotUnavailableError
+from ..foundations.quaternion import rotate
+from ..model.freebody import diagnose_many
 
 __all__ = ["agg_figure", "polhode", "herpolhode", "body_axes", "euler_angles",
            "regime_timeline", "ensemble_regimes", "ensemble_spread", "figures",
@@ -134,7 +134,7 @@ def polhode(eph):
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
-    >>> from attitude.plot import polhode
+    >>> from attitude.app.plot import polhode
     >>> fig = polhode(eph)
     >>> len(fig.axes)                   # the energy ellipsoid and the momentum sphere
     2
@@ -198,7 +198,7 @@ def herpolhode(eph):
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
-    >>> from attitude.plot import herpolhode
+    >>> from attitude.app.plot import herpolhode
     >>> fig = herpolhode(eph)
     >>> fig.axes[0].get_ylabel().endswith("(rad/s)")
     True
@@ -237,7 +237,7 @@ def body_axes(eph):
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
-    >>> from attitude.plot import body_axes
+    >>> from attitude.app.plot import body_axes
     >>> fig = body_axes(eph)
     >>> fig.axes[0].name
     '3d'
@@ -281,7 +281,7 @@ def euler_angles(eph, reference_axis: int | None = None):
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
-    >>> from attitude.plot import euler_angles
+    >>> from attitude.app.plot import euler_angles
     >>> fig = euler_angles(eph)
     >>> len(fig.axes)                   # angles and rates of phi, theta, psi
     6
@@ -324,7 +324,7 @@ def regime_timeline(eph, classification=None):
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
-    >>> from attitude.plot import regime_timeline
+    >>> from attitude.app.plot import regime_timeline
     >>> fig = regime_timeline(eph)
     >>> len(fig.axes)
     2
@@ -375,7 +375,7 @@ def ensemble_spread(eph, quantiles=(0.5, 0.9, 0.99), nominal=0):
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0})
     >>> eph = att.propagate(ens, np.linspace(0.0, 86400.0, 25))
-    >>> from attitude.plot import ensemble_spread
+    >>> from attitude.app.plot import ensemble_spread
     >>> fig = ensemble_spread(eph)
     >>> len(fig.axes) >= 1
     True
@@ -418,7 +418,7 @@ def ensemble_regimes(eph):
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0})
     >>> eph = att.propagate(ens, np.linspace(0.0, 86400.0, 25))
-    >>> from attitude.plot import ensemble_regimes
+    >>> from attitude.app.plot import ensemble_regimes
     >>> fig = ensemble_regimes(eph)
     >>> len(fig.axes) >= 1
     True
@@ -479,7 +479,7 @@ def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
     >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
-    >>> from attitude.plot import figures
+    >>> from attitude.app.plot import figures
     >>> sorted(figures(eph))
     ['body_axes', 'euler_angles', 'herpolhode', 'polhode']
     """
@@ -512,7 +512,7 @@ def save_figures(eph, stem: str | Path, classification=None, *, regime: bool | N
     >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
     >>> eph = att.propagate(body, state, np.linspace(0.0, 3000.0, 301))
     >>> import tempfile, pathlib
-    >>> from attitude.plot import save_figures
+    >>> from attitude.app.plot import save_figures
     >>> with tempfile.TemporaryDirectory() as d:
     ...     paths = save_figures(eph, pathlib.Path(d) / "run")
     ...     sorted(p.name for p in map(pathlib.Path, paths))

@@ -13,12 +13,12 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .classify import classify
-from .ephemeris import Ephemeris
-from .errors import AttitudeError, InvalidStateError
-from .freebody import diagnose_many
-from .population import Ensemble
-from .propagation.batch import STATUS_INVALID, STATUS_OK
+from ..foundations.errors import AttitudeError, InvalidStateError
+from ..model.ephemeris import Ephemeris
+from ..model.freebody import diagnose_many
+from ..model.population import Ensemble
+from ..propagation.batch import STATUS_INVALID, STATUS_OK
+from .classification import classify
 
 __all__ = ["diagnose_ensemble", "classify_ensemble", "regime_fractions", "period_quantiles",
            "attitude_spread", "spread_quantiles"]
@@ -26,7 +26,7 @@ __all__ = ["diagnose_ensemble", "classify_ensemble", "regime_fractions", "period
 
 def diagnose_ensemble(ensemble: Ensemble) -> xr.Dataset:
     """Analytic torque-free diagnosis of every body (vectorised
-    :func:`attitude.freebody.diagnose_many`): a Dataset along ``body`` with
+    :func:`attitude.model.freebody.diagnose_many`): a Dataset along ``body`` with
     ``regime``, the periods ``polhode precession rotation spin`` (s, NaN where absent),
     ``energy_ratio``, ``separatrix_distance``, ``nutation_min``/``nutation_max`` (rad) and
     ``valid``.
@@ -40,7 +40,7 @@ def diagnose_ensemble(ensemble: Ensemble) -> xr.Dataset:
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0},
     ...     sigma={"energy_ratio": 0.006})
-    >>> from attitude.statistics import diagnose_ensemble
+    >>> from attitude.analysis.statistics import diagnose_ensemble
     >>> d = diagnose_ensemble(ens)
     >>> d["precession"].sizes["body"], str(d["regime"].values[0])
     (50, 'SAM')
@@ -80,7 +80,7 @@ def regime_fractions(source) -> dict[str, float]:
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0},
     ...     sigma={"energy_ratio": 0.006})
-    >>> from attitude.statistics import regime_fractions
+    >>> from attitude.analysis.statistics import regime_fractions
     >>> f = regime_fractions(ens)       # E/E0 scattered across the separatrix C/B = 1.036
     >>> list(f), round(sum(f.values()), 12)
     (['SAM', 'LAM'], 1.0)
@@ -100,12 +100,12 @@ def regime_fractions(source) -> dict[str, float]:
 
 
 def classify_ensemble(eph, **options) -> xr.Dataset:
-    """:func:`attitude.classify` of every body of a batch ephemeris, one by one: a
+    """:func:`attitude.analysis.classification` of every body of a batch ephemeris, one by one: a
     Dataset along ``body`` with ``regime`` (``"invalid"`` for bodies whose ``status`` is
     not 0, ``"unclassified"`` when the classification failed, e.g. a run shorter than a
     cycle), ``confidence``, ``margin`` and ``reason`` (why a body is not classified).
     One body that cannot be classified does not stop the others.  ``options`` go to
-    :func:`attitude.classify` (default ``require_periods=False``).  A dask-backed
+    :func:`attitude.analysis.classification` (default ``require_periods=False``).  A dask-backed
     ephemeris is read one chunk of bodies at a time (its own chunks along ``body``), so
     the memory held is one chunk, not the ensemble.
 
@@ -186,7 +186,7 @@ def period_quantiles(source, q=(0.05, 0.5, 0.95)) -> xr.DataArray:
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0},
     ...     sigma={"energy_ratio": 0.006})
-    >>> from attitude.statistics import period_quantiles
+    >>> from attitude.analysis.statistics import period_quantiles
     >>> p = period_quantiles(ens)
     >>> round(float(p.sel(period="precession", quantile=0.5)) / 3600, 1)      # hours
     27.4
@@ -222,7 +222,7 @@ def attitude_spread(eph, nominal=0) -> xr.DataArray:
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0},
     ...     sigma={"energy_ratio": 0.006})
-    >>> from attitude.statistics import attitude_spread
+    >>> from attitude.analysis.statistics import attitude_spread
     >>> eph = att.propagate(ens, [0.0, 86400.0])
     >>> spread = attitude_spread(eph)
     >>> spread.dims, float(spread.isel(body=0).max())         # body 0 is the nominal
@@ -261,7 +261,7 @@ def spread_quantiles(eph, q=(0.5, 0.9, 0.99), nominal=0) -> xr.DataArray:
     ...           "energy_ratio": 1.024, "ratio_a": 0.61, "ratio_b": 0.965,
     ...           "precession_period": 98568.0},
     ...     sigma={"energy_ratio": 0.006})
-    >>> from attitude.statistics import spread_quantiles
+    >>> from attitude.analysis.statistics import spread_quantiles
     >>> s = spread_quantiles(att.propagate(ens, [0.0, 86400.0]))
     >>> s.dims
     ('quantile', 'time')

@@ -1,31 +1,34 @@
-"""The scenario file format, declared: one :class:`~attitude.spec.Table` per TOML table.
+"""The scenario file format, declared: one :class:`~attitude.foundations.spec.Table` per TOML table.
 
-:data:`SCENARIO` is the one source of the loader's checks (:func:`attitude.scenario.load_scenario`
-runs :func:`attitude.spec.validate` on it before any work), of ``docs/scenario.schema.json``
-(``python -m attitude.scenario --schema``) and of the key reference in docs/scenarios.md
-(``python -m attitude.scenario --reference``).  A new table is a :class:`~attitude.spec.Table`
-declared here and added to :data:`SCENARIO` (its reader goes into :mod:`attitude.scenario`).
+:data:`SCENARIO` is the one source of the loader's checks
+(:func:`attitude.app.scenario.load_scenario`
+runs :func:`attitude.foundations.spec.validate` on it before any work), of
+``docs/scenario.schema.json``
+(``python -m attitude.app.scenario --schema``) and of the key reference in docs/scenarios.md
+(``python -m attitude.app.scenario --reference``).  A new table is a
+:class:`~attitude.foundations.spec.Table`
+declared here and added to :data:`SCENARIO` (its reader goes into :mod:`attitude.app.scenario`).
 
 Examples
 --------
->>> from attitude.scenario_spec import SCENARIO
+>>> from attitude.app.scenario_spec import SCENARIO
 >>> SCENARIO["propagation"].table["duration"].describe()
 'quantity (s), > 0'
 """
 
 from __future__ import annotations
 
-from .body import MassProperties
-from .environment.config import TORQUE_TABLES as ENVIRONMENT_TORQUE_TABLES
-from .fitting.config import OBSERVATIONS
-from .photometry import config as photometry_config
-from .propagation.propagator import METHODS
-from .quantities import TIME_SCALES
-from .regimes import PERIOD_KEYS, REGIMES
-from .sampling import DIRECTION_SIGMA, MODELS
-from .spec import Key, Table
-from .spinorbit import section as spinorbit_section
-from .torques import TORQUE_TABLES
+from ..environment.config import TORQUE_TABLES as ENVIRONMENT_TORQUE_TABLES
+from ..fitting.config import OBSERVATIONS
+from ..foundations.quantities import TIME_SCALES
+from ..foundations.spec import Key, Table
+from ..model.body import MassProperties
+from ..model.regimes import PERIOD_KEYS, REGIMES
+from ..model.sampling import DIRECTION_SIGMA, MODELS
+from ..model.torques import TORQUE_TABLES
+from ..photometry import config as photometry_config
+from ..propagation.propagator import METHODS
+from ..spinorbit import section as spinorbit_section
 
 # --- the environment wing's [[torques]] types (issue 17): "solar_radiation", "drag" ------
 # declared in attitude.environment.config (which registers their builders with torques);

@@ -14,7 +14,7 @@ Constructors: :meth:`Ensemble.from_arrays`, :meth:`Ensemble.from_bodies` (sequen
 :class:`~attitude.RigidBody` and :class:`~attitude.AttitudeState`),
 :meth:`Ensemble.from_table` (CSV, Parquet, a pandas DataFrame or an xarray Dataset) and
 :meth:`Ensemble.sample` (a seeded Monte Carlo draw from a mean and covariance of
-physical parameters, :data:`attitude.sampling.MODELS`, or from a user callable).
+physical parameters, :data:`attitude.model.sampling.MODELS`, or from a user callable).
 
 A row whose input is not physical (inertia not positive-definite or violating the
 triangle inequality, a NaN rate, a zero quaternion, moment ratios out of range) does not
@@ -22,8 +22,8 @@ sink the others: it is recorded in :attr:`Ensemble.invalid` with its index and t
 reason, reported once (:class:`InvalidBodiesWarning`), and propagated as NaN with
 ``status = 1`` in the ephemeris.
 
-Sampling models live in :mod:`attitude.sampling`, table reading in
-:mod:`attitude.tables`, the statistics of a population in :mod:`attitude.statistics`
+Sampling models live in :mod:`attitude.model.sampling`, table reading in
+:mod:`attitude.model.tables`, the statistics of a population in :mod:`attitude.analysis.statistics`
 and its propagation in chunks (locally or on dask) in :mod:`attitude.propagation.batch`;
 :mod:`attitude.ensemble` gathers them for users.
 """
@@ -36,10 +36,10 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from . import quaternion as quat
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidBodiesWarning, InvalidInertiaError, InvalidStateError
+from ..foundations.quantities import to_si
 from .body import RigidBody, as_bodies, check_inertia, diagonal_inertia, principal_quaternions
-from .errors import InvalidBodiesWarning, InvalidInertiaError, InvalidStateError
-from .quantities import to_si
 from .sampling import draw, invalid_where
 from .state import AttitudeState, as_epoch, check_frame, stack_states
 from .tables import ensemble_columns
@@ -79,7 +79,7 @@ class Ensemble:
         verdict); merged with the checks, the given reason first.
     nominal : int, optional
         Index of the nominal member (the mean state of a sampled ensemble), from which
-        :func:`attitude.statistics.attitude_spread` measures; None for a catalogue.
+        :func:`attitude.analysis.statistics.attitude_spread` measures; None for a catalogue.
 
     Examples
     --------
@@ -245,7 +245,7 @@ class Ensemble:
             The random generator (or a seed for ``numpy.random.default_rng``): the same
             seed gives the same ensemble.
         model : {"tumbling", "spin"}
-            The parameterisation (:data:`attitude.sampling.MODELS`).
+            The parameterisation (:data:`attitude.model.sampling.MODELS`).
         mean : dict
             Parameter name -> value (a Quantity, a string astropy parses, or a number in
             SI: rad, rad/s, s, kg m^2).  Required parameters of the model must be given;
@@ -267,7 +267,7 @@ class Ensemble:
             still supplies parameters the sampler does not return).
         include_nominal : bool
             Body 0 is the mean state itself (default), so that
-            :func:`~attitude.statistics.attitude_spread` measures the spread from the
+            :func:`~attitude.analysis.statistics.attitude_spread` measures the spread from the
             nominal.
 
         Returns
@@ -369,8 +369,8 @@ def check_batch(bodies, states) -> tuple[list[RigidBody], list[AttitudeState]]:
     """Equal-length, non-empty sequences of bodies and states sharing one epoch and
     frame, as lists; otherwise :class:`~attitude.InvalidStateError` naming the index.
 
-    The checks are those of the batch normalisers :func:`attitude.body.as_bodies` and
-    :func:`attitude.state.stack_states`.
+    The checks are those of the batch normalisers :func:`attitude.model.body.as_bodies` and
+    :func:`attitude.model.state.stack_states`.
 
     Examples
     --------

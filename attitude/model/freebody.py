@@ -3,7 +3,7 @@ r"""The algebra of the free rigid body, shared by every kernel that uses it.
 The closed-form solution (:mod:`attitude.propagation.torquefree`), both paths of the
 splitting integrator's exact free flow (vectorised and one-body,
 :mod:`attitude.propagation.splitting`), the analytic diagnosis (``diagnose``) and the
-osculating quantities of an ephemeris (:mod:`attitude.diagnostics`) all use the
+osculating quantities of an ephemeris (:mod:`attitude.analysis.diagnostics`) all use the
 definitions of this module, so that each exists once:
 
 - the **kernel frame**: the principal axes ``(A, B, C)`` on the short-axis side of the
@@ -58,10 +58,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special as sp
 
-from . import elliptic as el
-from . import quaternion as quat
+from ..foundations import elliptic as el
+from ..foundations import quaternion as quat
+from ..foundations.errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
 from .body import SYMMETRY_RTOL, to_principal_frame
-from .errors import InvalidInertiaError, InvalidStateError, NearSeparatrixWarning
 from .regimes import PERIOD_KEYS, REGIMES
 
 __all__ = [
@@ -107,7 +107,7 @@ _TWO_PI = 2.0 * math.pi
 #: (tested), so the solver's limit is set by rounding alone.
 EQUAL_MOMENTS_RTOL = 4.0 * _EPS
 # "Equal moments" for the regime *labels* (``diagnose``, ``RigidBody.symmetry``,
-# ``attitude.diagnostics``) is attitude.body.SYMMETRY_RTOL (1e-12).  A second value is
+# ``attitude.analysis.diagnostics``) is attitude.body.SYMMETRY_RTOL (1e-12).  A second value is
 # needed: moments given by a user are rounded data (a tensor diagonalised by ``eigh``,
 # a shape model), and a body whose moments agree to 1e-12 should be *called*
 # axisymmetric, while its motion is still computed exactly from the moments as given
@@ -130,7 +130,7 @@ PURE_SPIN_TOL_UNSCALED = 1e-100
 #: the heteroclinic closed form equals the elliptic solution to
 #: ``O(m1 exp(2 lambda |t|))``, i.e. for ``lambda |t| < 200``.
 SEPARATRIX_M1_TOL = 1e-200
-#: ``diagnose`` warns (:class:`~attitude.errors.NearSeparatrixWarning`) when
+#: ``diagnose`` warns (:class:`~attitude.foundations.errors.NearSeparatrixWarning`) when
 #: ``0 < |m1| <`` this: the periods then change by more than 1e-6 relative under a
 #: 1-ulp change of input.
 NEAR_SEPARATRIX_WARN = 1e-10
@@ -524,7 +524,7 @@ def branches(I, w):
 
 
 def _kernel_frame(I, w, lam):
-    """(N, 3) moments and rates in the kernel frame (:mod:`attitude.freebody`, TF 9)."""
+    """(N, 3) moments and rates in the kernel frame (:mod:`attitude.model.freebody`, TF 9)."""
     Ik = np.stack(kernel_moments(I[:, 0], I[:, 1], I[:, 2], lam), axis=1)
     wk = np.stack(kernel_vector(w[:, 0], w[:, 1], w[:, 2], lam), axis=1)
     return Ik, wk
@@ -635,9 +635,9 @@ class Diagnosis:
     ----------
     regime : str
         One of ``"PA-short"``, ``"PA-long"``, ``"SAM"``, ``"LAM"``, ``"separatrix"``,
-        ``"axisymmetric"``, ``"spherical"``, ``"at-rest"`` (:data:`attitude.regimes.REGIMES`).
+        ``"axisymmetric"``, ``"spherical"``, ``"at-rest"`` (:data:`attitude.model.regimes.REGIMES`).
     periods : dict
-        Seconds, keys from :data:`attitude.regimes.PERIOD_KEYS`.  ``polhode`` (period of
+        Seconds, keys from :data:`attitude.model.regimes.PERIOD_KEYS`.  ``polhode`` (period of
         omega in the body frame, ``4K/lambda``), ``precession`` (mean period ``P_phi`` of
         the reference axis about L), ``rotation`` (``P_psi``, period of the rotation
         angle about the reference axis; equal to the polhode period), ``spin``
@@ -757,7 +757,7 @@ def diagnose_principal(moments, omega0, *, rtol_symmetry=None, rtol_spin=None,
         Principal-frame angular velocity (rad/s).
     rtol_symmetry : float, optional
         Moments within ``rtol_symmetry * C`` are equal for the *label* (default
-        ``attitude.body.SYMMETRY_RTOL``, 1e-12, the tolerance of
+        ``attitude.model.body.SYMMETRY_RTOL``, 1e-12, the tolerance of
         ``RigidBody.symmetry``).  Propagation itself uses :data:`EQUAL_MOMENTS_RTOL`.
     rtol_spin : float, optional
         The state is labelled principal-axis spin (``PA-short``, ``PA-long``, or

@@ -18,9 +18,9 @@ from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
+from ..foundations.errors import InvalidStateError
+from ..foundations.quantities import to_si, to_time
 from .body import RigidBody
-from .errors import InvalidStateError
-from .quantities import to_si, to_time
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
            "direction_frame", "spin_axis_quaternion", "stack_states", "format_epoch"]
@@ -121,7 +121,7 @@ def direction_frame(ra, dec) -> np.ndarray:
     Examples
     --------
     >>> import numpy as np
-    >>> from attitude.state import direction_frame
+    >>> from attitude.model.state import direction_frame
     >>> direction_frame(0.0, 0.0).round(12) + 0.0    # z toward RA 0, Dec 0; x the node
     array([[0., 0., 1.],
            [1., 0., 0.],
