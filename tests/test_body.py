@@ -254,7 +254,7 @@ def test_body_batch_moved_from_splitting_warns():
     import attitude.model.body
     import attitude.propagation.splitting as splitting
 
-    with pytest.warns(DeprecationWarning, match="use attitude.body.BodyBatch"):
+    with pytest.warns(DeprecationWarning, match="use attitude.model.body.BodyBatch"):
         cls = splitting.BodyBatch
     assert cls is attitude.body.BodyBatch
     batch, single = attitude.body.as_bodies([RigidBody.from_principal_moments([1, 2, 3])] * 3)
