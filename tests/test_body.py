@@ -256,6 +256,6 @@ def test_body_batch_moved_from_splitting_warns():
 
     with pytest.warns(DeprecationWarning, match="use attitude.model.body.BodyBatch"):
         cls = splitting.BodyBatch
-    assert cls is attitude.body.BodyBatch
-    batch, single = attitude.body.as_bodies([RigidBody.from_principal_moments([1, 2, 3])] * 3)
+    assert cls is attitude.model.body.BodyBatch
+    batch, single = attitude.model.body.as_bodies([RigidBody.from_principal_moments([1, 2, 3])] * 3)
     assert isinstance(batch, cls) and not single and batch.principal_moments.shape == (3, 3)

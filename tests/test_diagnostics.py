@@ -12,7 +12,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude import freebody as fb
+from attitude.model import freebody as fb
 from attitude.analysis.diagnostics import (
     DIAGNOSTIC_VARIABLES,
     DiagnosticsError,

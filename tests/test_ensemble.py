@@ -513,7 +513,7 @@ def test_masses_travel_with_the_bodies_for_torques_that_need_them():
 def test_classify_ensemble_reads_a_dask_backed_ephemeris_one_chunk_at_a_time(monkeypatch):
     """A lazy ephemeris is classified chunk by chunk along ``body`` (never loaded whole)
     and gives the classes of the in-memory one, invalid bodies included."""
-    from attitude import statistics
+    from attitude.analysis import statistics
 
     rng = np.random.default_rng(4)
     n = 10

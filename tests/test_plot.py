@@ -9,7 +9,7 @@ import attitude as att
 mpl = pytest.importorskip("matplotlib")
 from matplotlib.image import imread  # noqa: E402
 
-from attitude import plot  # noqa: E402
+from attitude.app import plot  # noqa: E402
 from attitude.model.torques import from_config  # noqa: E402
 from tests.test_cli import attitude  # noqa: E402
 from tests.test_scenario import GOOD, write  # noqa: E402

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from attitude import freebody as fb
-from attitude import quaternion as quat
+from attitude.model import freebody as fb
+from attitude.foundations import quaternion as quat
 from attitude.analysis.diagnostics import invariants, osculating_polhode_period
 from attitude.foundations.errors import InvalidInertiaError, NearSeparatrixWarning
 from attitude.model.body import (
