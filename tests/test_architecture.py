@@ -1,12 +1,20 @@
-"""The package's structure (docs/architecture.md): no import cycles, no private names
-reached across modules, imports inside functions only for optional or costly
-dependencies, and every public name of earlier releases still importable."""
+"""The package's structure (docs/architecture.md): imports point down the layers
+(foundations < model < propagation < analysis < wings < application), no import cycles,
+no private names reached across modules, imports inside functions only for optional or
+costly dependencies, every public name of earlier releases still importable, and the
+architecture page written from (and checked against) the import graph.
+
+``python tests/test_architecture.py`` rewrites the generated part of
+docs/architecture.md."""
 
 from __future__ import annotations
 
 import ast
 import importlib
+import json
 import pathlib
+import re
+import sys
 import warnings
 
 import pytest
@@ -14,6 +22,7 @@ import pytest
 import attitude
 
 ROOT = pathlib.Path(attitude.__file__).parent
+DOC = ROOT.parent / "docs" / "architecture.md"
 
 def _modules():
     for path in sorted(ROOT.rglob("*.py")):
@@ -144,6 +153,177 @@ def test_imports_inside_functions_are_optional_or_costly():
     assert not bad, "\n".join(bad)
 
 
+# --- layers -------------------------------------------------------------------------
+
+#: The layers, lowest first: a module may import its own layer and the layers below.
+LAYERS = ("foundations", "model", "propagation", "analysis", "wings", "application")
+
+#: The wings: each imports the layers below and its own modules, not another wing.
+WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit")
+
+#: Wings that build on another wing, with the reason: the only imports between wings.
+WING_USES = {
+    # lightcurve observations are photometry's brightness model with observed geometry
+    ("fitting", "photometry"),
+}
+
+#: Top-level modules: the user's namespaces (anything may be re-exported; nothing in the
+#: package imports them) and the two that import nothing and serve every layer.
+NAMESPACES = ("attitude", "attitude.ensemble", "attitude.torques", "attitude.spindown",
+              "attitude.__main__")
+BASE_MODULES = ("attitude.version", "attitude.deprecation")
+
+
+def layer_of(module: str) -> tuple[str, str | None]:
+    """``(layer, wing)`` of a module of the package: ``("namespace", None)`` for the
+    user's namespaces."""
+    parts = module.split(".")
+    if module in NAMESPACES:
+        return "namespace", None
+    if module in BASE_MODULES:
+        return "foundations", None
+    top = parts[1]
+    if top in WINGS:
+        return "wings", top
+    if top == "app":
+        return "application", None
+    if top in LAYERS:
+        return top, None
+    raise AssertionError(f"{module} is in no layer: put it in a layer's folder "
+                         f"({', '.join(LAYERS)}) or a wing ({', '.join(WINGS)})")
+
+
+def layer_violations(graph: dict[str, set[str]]) -> list[str]:
+    """The imports of ``graph`` (``{module: {imported module}}``, the package's own
+    modules only) that break the layer rules, one line each."""
+    rank = {name: i for i, name in enumerate(LAYERS)}
+    bad = []
+    for module, deps in sorted(graph.items()):
+        mine, my_wing = layer_of(module)
+        for dep in sorted(deps):
+            theirs, their_wing = layer_of(dep)
+            if theirs == "namespace":
+                if mine != "namespace":
+                    bad.append(f"{module} imports the user namespace {dep}")
+                continue
+            if mine == "namespace":
+                continue
+            if rank[theirs] > rank[mine]:
+                bad.append(f"{module} ({mine}) imports {dep} ({theirs}), a higher layer")
+            elif mine == theirs == "wings" and my_wing != their_wing \
+                    and (my_wing, their_wing) not in WING_USES:
+                bad.append(f"{module} (wing {my_wing}) imports {dep} (wing {their_wing})")
+    return bad
+
+
+def test_imports_point_down_the_layers():
+    bad = layer_violations(_internal(GRAPH))
+    assert not bad, "\n".join(bad)
+
+
+def test_the_layer_rule_catches_a_bad_import():
+    """A test of the test: an import upward, one across wings and one of a user
+    namespace are each reported; the package's own graph with them added fails."""
+    graph = {m: set(d) for m, d in _internal(GRAPH).items()}
+    graph["attitude.foundations.quaternion"].add("attitude.app.cli")
+    graph["attitude.formats.aem"].add("attitude.photometry.geometry")
+    graph["attitude.model.body"].add("attitude.torques")
+    bad = layer_violations(graph)
+    assert bad == [
+        "attitude.formats.aem (wing formats) imports attitude.photometry.geometry "
+        "(wing photometry)",
+        "attitude.foundations.quaternion (foundations) imports attitude.app.cli "
+        "(application), a higher layer",
+        "attitude.model.body imports the user namespace attitude.torques",
+    ]
+
+
+def test_every_module_is_in_a_layer():
+    for module in GRAPH:
+        layer_of(module)          # raises naming the module
+
+
+# --- docs/architecture.md -----------------------------------------------------------
+
+GENERATED_START = "<!-- BEGIN GENERATED: python tests/test_architecture.py -->"
+GENERATED_END = "<!-- END GENERATED -->"
+
+
+def layer_table(graph: dict[str, set[str]]) -> str:
+    """The markdown table of imports between layers (rows import columns), counted as
+    edges between modules, from the import graph."""
+    names = LAYERS
+    counts = {(a, b): 0 for a in names for b in names}
+    modules = {name: 0 for name in names}
+    for module, deps in graph.items():
+        mine, _ = layer_of(module)
+        if mine == "namespace":
+            continue
+        modules[mine] += 1
+        for dep in deps:
+            theirs, _ = layer_of(dep)
+            if theirs != "namespace":
+                counts[mine, theirs] += 1
+    lines = ["| imports -> | modules | " + " | ".join(names) + " |",
+             "| --- | ---: | " + " | ".join("---:" for _ in names) + " |"]
+    for a in names:
+        row = [str(counts[a, b]) if counts[a, b] else "" for b in names]
+        lines.append(f"| **{a}** | {modules[a]} | " + " | ".join(row) + " |")
+    return "\n".join(lines)
+
+
+def generated_section() -> str:
+    return (f"{GENERATED_START}\n{layer_table(_internal(GRAPH))}\n\n"
+            f"Wings that build on another wing: "
+            + ", ".join(f"{a} -> {b}" for a, b in sorted(WING_USES)) + f".\n{GENERATED_END}")
+
+
+def test_architecture_page_matches_the_import_graph():
+    """The table of imports between layers is written from the graph (regenerate with
+    ``python tests/test_architecture.py``), and the layout lists every module of the
+    package, and no other."""
+    text = DOC.read_text()
+    start, end = text.index(GENERATED_START), text.index(GENERATED_END) + len(GENERATED_END)
+    assert text[start:end] == generated_section(), \
+        "docs/architecture.md is stale: run python tests/test_architecture.py"
+    listed = set(re.findall(r"`(attitude/[\w/]+\.py)`", text))
+    actual = {str(path.relative_to(ROOT.parent)) for _, path in _modules()}
+    assert listed == actual, (f"docs/architecture.md: not listed {sorted(actual - listed)}; "
+                              f"listed but absent {sorted(listed - actual)}")
+
+
+def write_generated_section() -> None:
+    text = DOC.read_text()
+    start, end = text.index(GENERATED_START), text.index(GENERATED_END) + len(GENERATED_END)
+    DOC.write_text(text[:start] + generated_section() + text[end:])
+
+
+# --- names of earlier releases -------------------------------------------------------
+
+#: ``{module: [public names]}`` of the release before the layers (main at 7127c23),
+#: written by importing every module of that tree.
+PREVIOUS_RELEASE = json.loads(
+    (pathlib.Path(__file__).parent / "data" / "previous_release_names.json").read_text())
+
+
+@pytest.mark.parametrize("module", sorted(PREVIOUS_RELEASE))
+def test_every_name_of_the_previous_release_still_imports(module):
+    """Each module path of the previous release still imports and still offers each of
+    its public names; a path that moved warns (DeprecationWarning naming the new one)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mod = importlib.import_module(module)
+        missing = [n for n in PREVIOUS_RELEASE[module] if not hasattr(mod, n)]
+    assert not missing, f"{module} lost {missing}"
+    moved = module in attitude.deprecation.MOVED_MODULES
+    deprecations = [w for w in caught if issubclass(w.category, DeprecationWarning)
+                    and str(w.message).startswith(module + " is deprecated")]
+    if moved and PREVIOUS_RELEASE[module]:
+        assert deprecations, f"{module} moved but does not warn"
+    elif not moved:
+        assert not deprecations
+
+
 #: ``attitude.__all__`` of the release before the reorganisation (every name stays).
 PREVIOUS_ALL = [
     "__version__", "RigidBody", "MassProperties", "AttitudeState", "Ephemeris", "Ensemble",
@@ -200,3 +380,7 @@ def test_still_modules_after_reorganisation():
 def test_every_public_name_exists():
     missing = [n for n in attitude.__all__ if not hasattr(attitude, n)]
     assert not missing
+
+
+if __name__ == "__main__":
+    sys.exit(write_generated_section())

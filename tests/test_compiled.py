@@ -19,8 +19,8 @@ import pytest
 from scipy import special as sp
 from scipy.spatial.transform import Rotation
 
-from attitude.model import freebody as fb
 from attitude.foundations import quaternion as quat
+from attitude.model import freebody as fb
 from attitude.propagation import compiled, splitting
 from attitude.propagation.torquefree import free_rotation
 

@@ -12,7 +12,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.model import freebody as fb
 from attitude.analysis.diagnostics import (
     DIAGNOSTIC_VARIABLES,
     DiagnosticsError,
@@ -26,6 +25,7 @@ from attitude.analysis.diagnostics import (
     osculating_polhode_period,
     principal_series,
 )
+from attitude.model import freebody as fb
 from attitude.model.torques import EnergyDissipation
 from attitude.propagation import torquefree as tf
 

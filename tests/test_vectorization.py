@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from attitude.model import freebody as fb
-from attitude.foundations import quaternion as quat
 from attitude.analysis.diagnostics import invariants, osculating_polhode_period
+from attitude.foundations import quaternion as quat
 from attitude.foundations.errors import InvalidInertiaError, NearSeparatrixWarning
+from attitude.model import freebody as fb
 from attitude.model.body import (
     SYMMETRIC_TENSOR_RTOL,
     RigidBody,

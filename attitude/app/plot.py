@@ -40,7 +40,8 @@ from ..analysis.diagnostics import (
     reference_axis_for,
 )
 from ..analysis.statistics import attitude_spread
-from ..foundations.errors import AttitudeError, PlotUnavailableError
+from ..foundations.errors import AttitudeError
+from ..foundations.figures import agg_figure
 from ..foundations.quaternion import rotate
 from ..model.freebody import diagnose_many
 
@@ -55,33 +56,6 @@ _REGIME_COLOURS = {"PA-short": "tab:blue", "PA-long": "tab:red", "SAM": "tab:cya
                    "at-rest": "black", "chaotic": "tab:pink"}
 _MAX_POINTS = 4000
 
-
-
-def agg_figure(**kw):
-    """A matplotlib Figure on an Agg canvas, not registered with pyplot (no GUI, no
-    global state): what every figure of the package is drawn on.
-
-    Raises
-    ------
-    PlotUnavailableError
-        Without matplotlib (the ``plot`` extra).
-
-    Examples
-    --------
-    >>> fig = agg_figure(figsize=(4, 3))
-    >>> type(fig.canvas).__name__
-    'FigureCanvasAgg'
-    """
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg  # optional: [plot] extra
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise PlotUnavailableError("plots need matplotlib: pip install "
-                                   "'attitude-dynamics[plot]' (or pip install matplotlib)"
-                                   ) from None
-    fig = Figure(**kw)
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def _series(eph):

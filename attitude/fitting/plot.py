@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..app.plot import agg_figure
+from ..foundations.figures import agg_figure
 from .leastsq import FitResult
 from .parameters import ANGLES
 from .posterior import Posterior

@@ -21,9 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from attitude.app.plot import agg_figure
 from attitude.photometry.dataset import Lightcurve
 from attitude.photometry.periods import PeriodFit
+
+from ..foundations.figures import agg_figure
 
 __all__ = ["lightcurve_figure", "periodogram_figure", "folded_figure",
            "frequency_map_figure", "save_lightcurve_figures"]

@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..app.plot import agg_figure
 from ..foundations.errors import SpinOrbitError
+from ..foundations.figures import agg_figure
 from ..foundations.quantities import to_si
 from ..model.ephemeris import write_atomically
 from ..model.orbit import KeplerOrbit
