@@ -1,11 +1,15 @@
 """Module paths of earlier releases, kept as thin aliases that warn.
 
-The package was reorganised into wings (:mod:`attitude.propagation`,
-:mod:`attitude.formats`); the old flat paths (``attitude.splitting``,
-``attitude.aem``, ...) keep working: each is a module object registered under the old
-name whose attributes are those of the new module, and reading one issues a
-:class:`DeprecationWarning` that names the new path.  Nothing is imported until an
-attribute is read.
+The package was reorganised twice: into wings (:mod:`attitude.propagation`,
+:mod:`attitude.formats`), then the flat modules into the layers' folders
+(:mod:`attitude.foundations`, :mod:`attitude.model`, :mod:`attitude.analysis`,
+:mod:`attitude.app`).  The old paths (``attitude.splitting``, ``attitude.aem``,
+``attitude.body``, ``attitude.scenario``, ...) keep working: each is a module object
+registered under the old name whose attributes are those of the new module, and reading
+one issues a :class:`DeprecationWarning` that names the new path.  Nothing is imported
+until an attribute is read.  ``import attitude.classify as m`` still gives the function
+:func:`attitude.classify` (Python reads the package's attribute first), as it always did;
+``from attitude.classify import Classification`` reads the old module path.
 
 Examples
 --------
