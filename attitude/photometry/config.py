@@ -66,6 +66,19 @@ MATERIAL = Table("material", (
     Key("law", "any", required=True, schema=_LAW_SCHEMA, doc="the faces' scattering law"),
 ))
 
+#: The target's heliocentric orbit, ``orbit = { mu = ..., a = ..., e = ..., ... }``
+#: (:meth:`attitude.model.orbit.KeplerOrbit.from_elements`).
+ORBIT = Table("orbit", (
+    Key("mu", "quantity", unit="m3/s2", required=True, positive=True,
+        doc="gravitational parameter of the Sun (1.32712440018e20 m3/s2)"),
+    Key("a", "quantity", unit="m", required=True, positive=True, doc="semi-major axis"),
+    Key("e", "quantity", unit="", bounds=(0.0, None), default=0, doc="eccentricity, < 1"),
+    Key("i", "quantity", unit="rad", default=0, doc="inclination"),
+    Key("raan", "quantity", unit="rad", default=0, doc="longitude of the ascending node"),
+    Key("argp", "quantity", unit="rad", default=0, doc="argument of periapsis"),
+    Key("mean_anomaly", "quantity", unit="rad", default=0, doc="at the [state] epoch"),
+), doc="Keplerian elements in the inertial frame of the state")
+
 #: The ``[photometry]`` table (in :data:`attitude.app.scenario_spec.SCENARIO`; read by
 #: :func:`parse_photometry`, which also checks what a table cannot say: files, laws,
 #: directions).
@@ -88,9 +101,8 @@ PHOTOMETRY = Table("photometry", (
         {"enum": ["earth", "sun"]}]},
         doc="fixed direction body -> observer; with an orbit \"earth\" (default) or "
             "\"sun\""),
-    Key("orbit", "any", schema={"type": "object"},
-        doc="the target's heliocentric Kepler elements: { mu, a, e, i, raan, argp, "
-            "mean_anomaly } (geometry per epoch)"),
+    Key("orbit", "table", table=ORBIT,
+        doc="the target's heliocentric orbit (geometry per epoch)"),
     Key("light_time", "boolean", default=True, doc="with an orbit: light-time corrected"),
     Key("cadence", "quantity", unit="s", positive=True,
         doc="sampling; default [propagation].step"),
@@ -126,7 +138,8 @@ EXPECT = (
 )
 
 __all__ = ["PhotometryConfig", "LightcurveRun", "parse_photometry", "run_lightcurve",
-           "check_lightcurve", "EXPECT", "EXPECT_KEYS", "PHOTOMETRY", "MATERIAL"]
+           "check_lightcurve", "EXPECT", "EXPECT_KEYS", "PHOTOMETRY", "MATERIAL",
+           "ORBIT"]
 
 #: The lightcurve keys of ``[expect]``.
 EXPECT_KEYS = tuple(k.name for k in EXPECT)
@@ -291,14 +304,8 @@ def _law(table, path, n_faces):
 
 def _geometry(table, path):
     if "orbit" in table:
-        orbit = table["orbit"]
-        if not isinstance(orbit, dict):
-            raise _fail(path, "photometry.orbit", "expected { mu = ..., a = ..., e = ... }")
         try:
-            kepler = KeplerOrbit.from_elements(**orbit)
-        except TypeError:
-            raise _fail(path, "photometry.orbit", "allowed keys: mu, a, e, i, raan, argp, "
-                                                  "mean_anomaly") from None
+            kepler = KeplerOrbit.from_elements(**table["orbit"])
         except AttitudeError as exc:
             raise _fail(path, f"photometry.orbit.{exc.key}", exc.reason) from None
         observer = table.get("observer", "earth")

@@ -36,7 +36,7 @@ from ..app.plot import agg_figure
 from ..foundations.errors import AttitudeError, SpinOrbitError
 from ..foundations.expectation import Expectation
 from ..foundations.quantities import to_si
-from ..foundations.spec import Key, Table, validate
+from ..foundations.spec import Key, Table, json_schema, validate
 from ..model.ephemeris import write_atomically
 from ..model.orbit import KeplerOrbit
 from ..model.torques import GravityGradient, SumTorque
@@ -44,14 +44,17 @@ from .libration import long_axis_angle, measure_libration
 from .model import SpinOrbit
 from .planar import periodic_orbit
 
-#: A grid axis of the ``[section]`` table: a list, or ``{min, max, count, unit}``
-#: (checked by :func:`parse_section`).
+#: The ``{min, max, count, unit}`` form of a grid axis of the ``[section]`` table.
+GRID = Table("grid", (
+    Key("min", "number", required=True),
+    Key("max", "number", required=True),
+    Key("count", "integer", required=True, positive=True),
+    Key("unit", "unit", doc="angles: default rad"),
+))
+#: A grid axis: a list of numbers, or :data:`GRID` (checked by :func:`parse_section`).
 _GRID_SCHEMA = {"oneOf": [
     {"type": "array", "items": {"type": "number"}, "minItems": 1},
-    {"type": "object", "properties": {"min": {"type": "number"}, "max": {"type": "number"},
-                                      "count": {"type": "integer", "minimum": 1},
-                                      "unit": {"type": "string"}},
-     "required": ["min", "max", "count"], "additionalProperties": False},
+    json_schema(GRID, root=False),
 ]}
 
 #: The ``[section]`` table (in :data:`attitude.app.scenario_spec.SCENARIO`; read by
@@ -83,8 +86,8 @@ EXPECT = (
         doc="The p:q spin-orbit state of the run (\"1:1\", \"3:2\", or \"none\")."),
 )
 
-__all__ = ["EXPECT", "EXPECT_KEYS", "SECTION", "SECTION_KEYS", "SectionConfig", "parse_expect",
-           "parse_section", "load_tables", "spin_orbit_of", "expectation_values",
+__all__ = ["EXPECT", "EXPECT_KEYS", "GRID", "SECTION", "SECTION_KEYS", "SectionConfig",
+           "parse_expect", "parse_section", "load_tables", "spin_orbit_of", "expectation_values",
            "mean_spin_resonance", "run_section", "write_section", "island_centres",
            "section_figure"]
 
@@ -287,20 +290,13 @@ def _axis(spec, key: str, unit: str, fail: Fail) -> tuple[np.ndarray, bool]:
         return values, True
     if not isinstance(spec, Mapping):
         raise fail(key, "expected { min = ..., max = ..., count = ... } or a list")
-    extra = set(spec) - {"min", "max", "count", "unit"}
-    if extra:
-        raise fail(f"{key}.{sorted(extra)[0]}", "unknown key; allowed: min, max, count, unit")
+    spec = _checked(spec, GRID, key, fail)
     try:
         scale = 1.0 if unit == "" else to_si(f"1 {spec.get('unit', unit)}", unit,
-                                             name=f"{key}.unit")
-        lo, hi = float(spec["min"]) * scale, float(spec["max"]) * scale
-        count = spec["count"]
-    except KeyError as exc:
-        raise fail(f"{key}.{exc.args[0]}", "missing key") from None
-    except (TypeError, ValueError) as exc:
-        raise fail(key, f"expected numbers and an angle unit ({exc})") from None
-    if not isinstance(count, int) or isinstance(count, bool) or count < 1:
-        raise fail(f"{key}.count", f"expected a positive integer, got {count!r}")
+                                             key=f"{key}.unit")
+    except AttitudeError as exc:
+        raise fail(f"{key}.unit", exc.reason) from None
+    lo, hi, count = spec["min"] * scale, spec["max"] * scale, spec["count"]
     if not (math.isfinite(lo) and math.isfinite(hi) and hi >= lo):
         raise fail(key, f"expected finite min <= max, got {spec.get('min')!r}, "
                         f"{spec.get('max')!r}")
