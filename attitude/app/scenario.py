@@ -104,6 +104,8 @@ class Scenario:
     torques: tuple = ()
     netcdf: Path | None = None
     expect: tuple = ()
+    """The ``[expect]`` entries (:class:`attitude.foundations.expectation.Expectation`;
+    the lightcurve keys are in :attr:`photometry`)."""
     ensemble: Any = None
     """An :class:`attitude.Ensemble` when the file has an ``[ensemble]`` table (``body``
     and ``state`` are then its nominal member: body 0, or the first valid one)."""
