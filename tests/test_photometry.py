@@ -295,3 +295,20 @@ def test_lightcurve_checks_epochs_and_frame():
     const = Geometry(sun=[1.0, 0, 0], observer=[0.0, 1.0, 0])
     np.testing.assert_allclose(lightcurve(eph, shape, per_epoch).dataset.flux,
                                lightcurve(eph, shape, const).dataset.flux, rtol=1e-14)
+
+
+def test_a_string_epoch_is_the_same_instant_in_a_state_and_a_lightcurve(tmp_path):
+    """A plain ISO 8601 epoch is read by the one reader (quantities.to_time) in its one
+    default scale, TDB, by AttitudeState and by Lightcurve.from_arrays alike (the latter
+    read it as UTC: 69 s apart in 2030)."""
+    text = "2030-01-01T00:00:00"
+    state = att.AttitudeState(text, Rotation.identity(), [0.0, 0.0, 1e-3])
+    lc = Lightcurve.from_arrays([0.0, 10.0], magnitude=[1.0, 1.2], epoch=text)
+    assert state.epoch.scale == lc.epoch.scale == "tdb"
+    assert abs((lc.epoch - state.epoch).to_value("s")) < 1e-9
+    back = Lightcurve.from_netcdf(lc.to_netcdf(tmp_path / "lc.nc"))
+    assert abs((back.epoch - state.epoch).to_value("s")) < 1e-9
+    # an explicit scale is kept: the same wall-clock text in UTC is another instant
+    utc = Lightcurve.from_arrays([0.0], magnitude=[1.0], epoch=Time(text, scale="utc"))
+    assert utc.epoch.scale == "utc"
+    assert (utc.epoch - state.epoch).to_value("s") == pytest.approx(69.184, abs=1e-3)

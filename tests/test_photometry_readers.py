@@ -23,6 +23,7 @@ def test_alcdef_two_sessions_light_time_and_delimiters():
     # session 0: LTCAPP=NONE with LTCDAYS -> moved to the asteroid; session 1: applied
     jd0 = 2456318.5 - 0.000578
     assert lc.epoch.utc.jd == pytest.approx(jd0, abs=1e-9)
+    assert lc.epoch.scale == "utc"            # observers' times: the reader says UTC
     expected = (np.array([2456318.5, 2456318.51, 2456318.52, 2456319.5 + 0.000578,
                           2456319.51 + 0.000578]) - 2456318.5) * 86400.0
     np.testing.assert_allclose(lc.time, expected, atol=1e-4)     # 0.1 ms: JD rounding
@@ -44,6 +45,7 @@ def test_read_lightcurve_dispatches_and_round_trips(tmp_path):
     np.testing.assert_allclose(csv.time, [0.0, 600.0, 86400.0], rtol=0, atol=1e-9)
     assert csv.dataset.session.values.tolist() == [0, 0, 1]
     assert csv.epoch.isot == "2029-04-13T00:00:00.000"
+    assert csv.epoch.scale == back.epoch.scale == "utc"      # read as UTC, kept in the file
 
 
 @pytest.mark.parametrize("text, line, match", [

@@ -49,7 +49,8 @@ def test_schema_keys_match_the_loader():
     schema = _schema()
     props = schema["properties"]
     assert set(props) == set(SCHEMA)
-    for table in ("scenario", "body", "state", "propagation", "output", "ensemble"):
+    for table in ("scenario", "body", "state", "propagation", "output", "ensemble",
+                  "section", "photometry"):
         assert set(props[table]["properties"]) == set(SCHEMA[table]), table
     expect = props["expect"]["properties"]
     assert set(expect) == {"regime", *PERIOD_KEYS, *CONSERVATION_KEYS, "nutation_range",

@@ -24,6 +24,7 @@ from attitude.analysis.lyapunov import lyapunov_exponent
 from attitude.app.cli import main
 from attitude.app.scenario import load_scenario
 from attitude.foundations.errors import ScenarioError, SpinOrbitError
+from attitude.foundations.expectation import Expectation
 from attitude.model.torques import GravityGradient
 from attitude.spinorbit import (
     cayley_coefficient,
@@ -345,7 +346,7 @@ def test_cli_section_bad_input_exits_2(tmp_path, capsys):
 
 def test_spin_orbit_expectations_are_not_for_ensembles():
     with pytest.raises(SpinOrbitError, match="expect.resonance: not for"):
-        load_tables({}, body=None, torques=(), expect=({"key": "resonance"},),
+        load_tables({}, body=None, torques=(), expect=(Expectation.exact("resonance", "1:1"),),
                     ensemble=object())
 
 

@@ -35,6 +35,7 @@ from ..foundations.errors import (
     InvalidBodiesWarning,
     ScenarioError,
 )
+from ..foundations.expectation import Expectation
 from ..foundations.quantities import read_unit
 from ..foundations.spec import Key, Table, json_schema, markdown, validate
 from ..model.body import MassProperties, RigidBody
@@ -54,7 +55,14 @@ from ..propagation.batch import STATUS_FAILED, STATUS_OK
 from ..propagation.events import nutation_crossing
 from ..propagation.propagator import propagate
 from ..spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
-from .scenario_spec import CONSERVATION_KEYS, EXPECT_KEYS, REDUCTIONS, SCENARIO, SPIN_EXPECT_KEYS
+from .scenario_spec import (
+    CONSERVATION_KEYS,
+    EXPECT_KEYS,
+    REDUCTIONS,
+    SCENARIO,
+    SPIN_EXPECT_KEYS,
+    SPIN_EXPECT_UNITS,
+)
 
 __all__ = ["Scenario", "RunResult", "load_scenario", "run_scenario", "check_expectations",
            "spin_axis_state", "known_variables", "SCHEMA", "EXPECT_KEYS", "SCENARIO",
@@ -96,6 +104,8 @@ class Scenario:
     torques: tuple = ()
     netcdf: Path | None = None
     expect: tuple = ()
+    """The ``[expect]`` entries (:class:`attitude.foundations.expectation.Expectation`;
+    the lightcurve keys are in :attr:`photometry`)."""
     ensemble: Any = None
     """An :class:`attitude.Ensemble` when the file has an ``[ensemble]`` table (``body``
     and ``state`` are then its nominal member: body 0, or the first valid one)."""
@@ -225,7 +235,7 @@ def load_scenario(path: str | Path) -> Scenario:
 
     netcdf = doc.get("output", {}).get("netcdf")
     expect = _parse_expect(r, doc.get("expect", {}))
-    if ensemble is None and any(e["key"].startswith("regime_fractions") for e in expect):
+    if ensemble is None and any(e.key.startswith("regime_fractions") for e in expect):
         raise r.fail("expect.regime_fractions", "only for scenarios with an [ensemble] table")
     section = spinorbit_section.load_tables(   # spin-orbit wing: [section], its [expect]
         doc, body=body, torques=torques, expect=expect, ensemble=ensemble,
@@ -703,22 +713,17 @@ def known_variables() -> dict[str, tuple[str, bool]]:
     return out
 
 
-def _tolerance(spec: dict, value: float) -> float:
-    """Exactly one of ``rel_tol`` / ``abs_tol`` (in the expectation's unit) -> absolute."""
-    return spec["rel_tol"] * abs(value) if "rel_tol" in spec else spec["abs_tol"]
-
-
-def _parse_nutation_range(r: _Reader, spec: dict, where: str) -> list[dict]:
-    """``{ min = .., max = .., unit = "deg", abs_tol = .. }`` -> two entries
+def _parse_nutation_range(r: _Reader, spec: dict, where: str) -> list[Expectation]:
+    """``{ min = .., max = .., unit = "deg", abs_tol = .. }`` -> two expectations
     ``nutation_range.min`` and ``nutation_range.max`` (in ``unit``, default rad)."""
     unit = spec.get("unit", "rad")
     if not spec["min"] <= spec["max"]:
         raise r.fail(where, f"min ({spec['min']}) is larger than max ({spec['max']})")
-    return [{"key": f"nutation_range.{k}", "expected": spec[k], "unit": unit,
-             "tolerance": spec["abs_tol"]} for k in ("min", "max")]
+    return [Expectation(f"nutation_range.{k}", spec[k], unit, abs_tol=spec["abs_tol"])
+            for k in ("min", "max")]
 
 
-def _parse_variables(r: _Reader, table: dict, where: str) -> list[dict]:
+def _parse_variables(r: _Reader, table: dict, where: str) -> list[Expectation]:
     """``[expect.variables]``: ``name = { at = "end", component = 2, value = .., unit = "..",
     rel_tol = .. }`` for any variable of :func:`known_variables`."""
     known = known_variables()
@@ -759,33 +764,33 @@ def _parse_variables(r: _Reader, table: dict, where: str) -> list[dict]:
             read_unit(unit_text, like=var_units)
         except AttitudeError as exc:
             raise r.fail(f"{key}.unit", exc.reason) from None
-        value = spec["value"]
-        out.append({"key": f"variables.{label}", "expected": value, "unit": unit_text,
-                    "tolerance": _tolerance(spec, value), "variable": name, "at": at,
-                    "component": component})
+        out.append(Expectation.from_table(
+            f"variables.{label}", {**spec, "unit": unit_text},
+            source=(("variable", name), ("at", at), ("component", component))))
     return out
 
 
-def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
-    """The ``[expect]`` table (already checked against the spec) as a tuple of entries.
+def _parse_expect(r: _Reader, table: dict) -> tuple[Expectation, ...]:
+    """The ``[expect]`` table (already checked against the spec) as a tuple of
+    :class:`~attitude.foundations.expectation.Expectation`.
 
     ``regime = "SAM"``; a period key (``polhode``, ``precession``, ``rotation``, ``spin``)
     as ``{ value = 27.38, unit = "h", rel_tol = 0.01 }`` (or ``abs_tol`` in the same
     unit); a conservation key as ``{ max = 1e-12 }``; ``nutation_range = { min = ..,
     max = .., unit = "deg", abs_tol = .. }``; a ``[expect.variables]`` table of dataset
-    variables reduced over the run (:func:`_parse_variables`); ``[expect.regime_fractions]``.
+    variables reduced over the run (:func:`_parse_variables`); ``[expect.regime_fractions]``;
+    the spin period and its trend; the spin-orbit wing's keys.  The lightcurve keys are
+    read with ``[photometry]`` (:func:`attitude.photometry.config.parse_photometry`).
     """
     parsed = []
     for key, spec in table.items():
         where = f"expect.{key}"
         if key == "regime":
-            parsed.append({"key": key, "expected": spec})
+            parsed.append(Expectation.exact(key, spec))
         elif key in PERIOD_KEYS:
-            value = spec["value"]
-            parsed.append({"key": key, "expected": value, "unit": spec.get("unit", "s"),
-                           "tolerance": _tolerance(spec, value)})
+            parsed.append(Expectation.from_table(key, spec, default_unit="s"))
         elif key in CONSERVATION_KEYS:
-            parsed.append({"key": key, "expected": spec["max"]})
+            parsed.append(Expectation.at_most(key, spec["max"]))
         elif key == "nutation_range":
             parsed.extend(_parse_nutation_range(r, spec, where))
         elif key == "variables":
@@ -795,18 +800,13 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[dict, ...]:
         elif key in spinorbit_section.EXPECT_KEYS:          # spin-orbit wing
             parsed.append(spinorbit_section.parse_expect(key, spec, r.fail))
         elif key in SPIN_EXPECT_KEYS:                      # issue 17: attitude.spindown
-            value = spec["value"]
-            unit = spec.get("unit", {"spin_period": "s", "spin_period_trend": "ms/day",
-                                     "spin_down_efolding": "d"}[key])
-            entry = {"key": key, "expected": value, "unit": unit,
-                     "tolerance": _tolerance(spec, value)}
-            if key == "spin_period":
-                entry["at"] = spec.get("at", "end")
-            parsed.append(entry)
+            at = (("at", spec.get("at", "end")),) if key == "spin_period" else ()
+            parsed.append(Expectation.from_table(key, spec,
+                                                 default_unit=SPIN_EXPECT_UNITS[key],
+                                                 reported=at))
         elif key == "regime_fractions":
-            for regime, frac in spec.items():
-                parsed.append({"key": f"regime_fractions.{regime}", "expected": frac["value"],
-                               "tolerance": _tolerance(frac, frac["value"])})
+            parsed.extend(Expectation.from_table(f"regime_fractions.{regime}", frac)
+                          for regime, frac in spec.items())
     return tuple(parsed)
 
 
@@ -815,13 +815,14 @@ def needs_dataset(scenario: Scenario) -> str | None:
     ``None`` (no), ``"base"`` (base variables only), ``"diagnostics"`` or ``"periods"``."""
     need = None
     base = set(BASE_VARIABLES)
-    for spec in scenario.expect:
-        if spec["key"].startswith("nutation_range.") and scenario.torques:
+    for e in scenario.expect:
+        variable = e.option("variable")
+        if e.key.startswith("nutation_range.") and scenario.torques:
             need = need or "diagnostics"
-        elif "variable" in spec:
-            if spec["variable"].startswith("period_"):
+        elif variable is not None:
+            if variable.startswith("period_"):
                 return "periods"
-            if spec["variable"] not in base:
+            if variable not in base:
                 need = "diagnostics"
             elif need is None:
                 need = "base"
@@ -838,20 +839,20 @@ def _reduce(data: np.ndarray, at: str | None) -> float:
     return float(getattr(np, {"max": "nanmax", "min": "nanmin", "mean": "nanmean"}[at])(data))
 
 
-def _variable_value(dataset, spec: dict) -> float | None:
+def _variable_value(dataset, e: Expectation) -> float | None:
     """The reduced value of one ``[expect.variables]`` entry in its expected unit."""
-    if dataset is None or spec["variable"] not in dataset:
+    if dataset is None or e.option("variable") not in dataset:
         return None
-    var = dataset[spec["variable"]]
+    var = dataset[e.option("variable")]
     data = np.asarray(var.values, dtype=float)
-    comp = spec["component"]
+    comp = e.option("component")
     if comp == "norm":
         data = np.linalg.norm(data, axis=-1)
     elif comp is not None:
         data = data[..., comp]
-    got = _reduce(data, spec["at"])
+    got = _reduce(data, e.option("at"))
     units = var.attrs.get("units", "1")
-    return float((got * u.Unit(units)).to_value(spec["unit"]))
+    return float((got * u.Unit(units)).to_value(e.unit))
 
 
 def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
@@ -881,56 +882,41 @@ def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
     0.00033108
     """
     results = []
-    for spec in scenario.expect:
-        key = spec["key"]
-        out = {k: v for k, v in spec.items() if k not in ("variable", "at", "component")
-               or key == "spin_period"}
+    for e in scenario.expect:
+        key = e.key
         if key == "resonance":                        # spin-orbit wing: a "p:q" string
-            out["got"] = (spinorbit or {}).get(key)
-            out["ok"] = out["got"] == spec["expected"]
-            results.append(out)
-            continue
-        if key == "regime":
-            out["got"] = regime
-            out["ok"] = regime == spec["expected"]
-            results.append(out)
-            continue
-        if key in PERIOD_KEYS:
+            got = (spinorbit or {}).get(key)
+        elif key == "regime":
+            got = regime
+        elif key in PERIOD_KEYS:
             got = periods.get(key)
-            got = None if got is None else got / u.Unit(spec["unit"]).to(u.s)
+            got = None if got is None else got / u.Unit(e.unit).to(u.s)
         elif key.startswith("nutation_range."):
             got = _nutation_bound(scenario, key.rsplit(".", 1)[1], diagnosis, dataset)
-            got = None if got is None else float((got * u.rad).to_value(spec["unit"]))
+            got = None if got is None else float((got * u.rad).to_value(e.unit))
         elif key.startswith("variables."):
-            got = _variable_value(dataset, spec)
+            got = _variable_value(dataset, e)
         elif key.startswith("regime_fractions."):
             got = None if fractions is None else fractions.get(key.split(".", 1)[1], 0.0)
         elif key == "libration_amplitude":            # spin-orbit wing
             got = (spinorbit or {}).get(key)
         elif key in SPIN_EXPECT_KEYS:                 # issue 17: attitude.spindown
-            got = None if spin is None else _spin_value(spin, spec)
-        else:
-            out["got"] = conservation[key]
-            out["ok"] = bool(out["got"] <= spec["expected"])
-            results.append(out)
-            continue
-        out["got"] = got
-        out["ok"] = bool(got is not None and np.isfinite(got) and
-                         abs(got - spec["expected"]) <= spec["tolerance"])
-        results.append(out)
+            got = None if spin is None else _spin_value(spin, e)
+        else:                                         # a conservation bound
+            got = conservation[key]
+        results.append(e.check(got))
     return results
 
 
-def _spin_value(spin, spec: dict) -> float:
+def _spin_value(spin, e: Expectation) -> float:
     """The spin period (at ``start`` / ``end``), its trend or its e-folding time, in the
     expectation's unit."""
-    key = spec["key"]
-    if key == "spin_period":
-        seconds = spin.period_start if spec["at"] == "start" else spin.period_end
-        return float((seconds * u.s).to_value(spec["unit"]))
-    if key == "spin_period_trend":
-        return float((spin.trend * u.dimensionless_unscaled).to_value(spec["unit"]))
-    return float((spin.efolding * u.s).to_value(spec["unit"]))
+    if e.key == "spin_period":
+        seconds = spin.period_start if e.option("at") == "start" else spin.period_end
+        return float((seconds * u.s).to_value(e.unit))
+    if e.key == "spin_period_trend":
+        return float((spin.trend * u.dimensionless_unscaled).to_value(e.unit))
+    return float((spin.efolding * u.s).to_value(e.unit))
 
 
 def _nutation_bound(scenario: Scenario, which: str, diagnosis, dataset) -> float | None:

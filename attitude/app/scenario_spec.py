@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from ..environment.config import TORQUE_TABLES as ENVIRONMENT_TORQUE_TABLES
 from ..fitting.config import OBSERVATIONS
+from ..foundations.expectation import Expectation
 from ..foundations.quantities import TIME_SCALES
 from ..foundations.spec import Key, Table
 from ..model.body import MassProperties
@@ -38,7 +39,7 @@ _TORQUE_VARIANTS = tuple({**TORQUE_TABLES,
 # --- end of the environment block ------------------------------------------------------
 
 __all__ = ["SCENARIO", "ROTATION", "PART", "CONSERVATION_KEYS", "REDUCTIONS", "EXPECT_KEYS",
-           "PRIMITIVE_NAMES", "SPIN_EXPECT_KEYS"]
+           "PRIMITIVE_NAMES", "SPIN_EXPECT_KEYS", "SPIN_EXPECT_UNITS"]
 
 #: Largest relative changes over a run that ``[expect]`` may bound.
 CONSERVATION_KEYS = ("angular_momentum_rel_drift", "energy_rel_drift")
@@ -140,49 +141,40 @@ OUTPUT = Table("output", (
     Key("netcdf", "string", doc="relative to the scenario file unless -o is given"),
 ))
 
-_TOLERANCE = (Key("rel_tol", "number", nonnegative=True, doc="relative tolerance"),
-              Key("abs_tol", "number", nonnegative=True, doc="absolute tolerance, in `unit`"))
-_ONE_TOLERANCE = (("rel_tol", "abs_tol"),)
+_PERIOD = Expectation.table("period", unit="s", default_unit="s")
 
-_PERIOD = Table("period", (
-    Key("value", "number", required=True), Key("unit", "unit", unit="s", default="s"),
-    *_TOLERANCE), exactly_one=_ONE_TOLERANCE)
-
-_VARIABLE = Table("variable", (
+_VARIABLE = Expectation.table("variable", unit=None, unit_doc="default: the variable's unit",
+                              before=(
     Key("variable", "string", doc="the dataset variable; default: the key"),
     Key("at", "string", choices=REDUCTIONS, doc="reduction of a time series"),
     Key("component", "any", doc="an index (0-based) or \"norm\", for vectors"),
-    Key("value", "number", required=True),
-    Key("unit", "unit", doc="default: the variable's unit"),
-    *_TOLERANCE), exactly_one=_ONE_TOLERANCE)
+))
 
 # --- the spin period and its trend (attitude.spindown; issue 17) ---
 #: ``[expect]`` keys on the spin period of a run and its least-squares trend.
 SPIN_EXPECT_KEYS = ("spin_period", "spin_period_trend", "spin_down_efolding")
+#: Default units of the spin expectations.
+SPIN_EXPECT_UNITS = {"spin_period": "s", "spin_period_trend": "ms/day",
+                     "spin_down_efolding": "d"}
 _SPIN_EXPECT = (
-    Key("spin_period", "table", table=Table("spin_period", (
-        Key("value", "number", required=True), Key("unit", "unit", unit="s", default="s"),
-        Key("at", "string", choices=("start", "end"), default="end",
-            doc="the first or last epoch"),
-        *_TOLERANCE), exactly_one=_ONE_TOLERANCE),
+    Key("spin_period", "table", table=Expectation.table(
+        "spin_period", unit="s", default_unit="s", after=(
+            Key("at", "string", choices=("start", "end"), default="end",
+                doc="the first or last epoch"),)),
         doc="spin period 2 pi L / (2 E), 2 pi / omega for a principal-axis spin "
             "(attitude.spindown)"),
-    Key("spin_period_trend", "table", table=Table("spin_period_trend", (
-        Key("value", "number", required=True),
-        Key("unit", "unit", unit="", default="ms/day", doc="e.g. ms/day, s/yr"),
-        *_TOLERANCE), exactly_one=_ONE_TOLERANCE),
+    Key("spin_period_trend", "table", table=Expectation.table(
+        "spin_period_trend", unit="", default_unit="ms/day", unit_doc="e.g. ms/day, s/yr"),
         doc="dP/dt, least-squares slope of the spin period over the run"),
-    Key("spin_down_efolding", "table", table=Table("spin_down_efolding", (
-        Key("value", "number", required=True), Key("unit", "unit", unit="s", default="d"),
-        *_TOLERANCE), exactly_one=_ONE_TOLERANCE),
+    Key("spin_down_efolding", "table", table=Expectation.table(
+        "spin_down_efolding", unit="s", default_unit="d"),
         doc="1 / (d ln P / dt) over the run: tau of P = P0 exp(t / tau); negative for a "
             "spin-up"),
 )
 # --- end spin period ---
 
-_FRACTION = Table("fraction", (
-    Key("value", "number", required=True, bounds=(0.0, 1.0)), *_TOLERANCE),
-    exactly_one=_ONE_TOLERANCE)
+_FRACTION = Expectation.table("fraction", with_unit=False, value=Key(
+    "value", "number", required=True, bounds=(0.0, 1.0)))
 
 EXPECT = Table("expect", (
     Key("regime", "string", choices=REGIMES),
@@ -199,11 +191,9 @@ EXPECT = Table("expect", (
     *_SPIN_EXPECT,                           # the spin period and its trend (issue 17)
     Key("regime_fractions", "map", table=_FRACTION, choices=REGIMES,
         nonempty=True, doc="[ensemble] only: fraction of the valid bodies per regime"),
-    # the wings' keys: checked by their parsers (spinorbit.section, photometry.config)
-    *(Key(k, "any", schema=v, doc=v.get("description", "spin-orbit (docs/spinorbit.md)"))
-      for k, v in spinorbit_section.EXPECT_SCHEMAS.items()),
-    *(Key(k, "any", schema=v, doc=v.get("description", "lightcurve (docs/photometry.md)"))
-      for k, v in photometry_config.EXPECT_SCHEMAS.items()),
+    # the wings' keys, declared by the wings (spinorbit.section, photometry.config)
+    *spinorbit_section.EXPECT,
+    *photometry_config.EXPECT,
 ), doc="What the run should give; a failed expectation exits with 1.")
 
 _PARAMETER_UNITS = {k: v for spec in MODELS.values() for k, v in spec.items()}
@@ -260,11 +250,11 @@ SCENARIO = Table("", (
     Key("ensemble", "table", table=ENSEMBLE),
     Key("observations", "table", table=OBSERVATIONS,
         doc="what was measured, for `attitude fit` (docs/tutorial_fitting.md)"),
-    Key("section", "any", schema=spinorbit_section.SECTION_SCHEMA,
-        doc="surface of section for `attitude section` (docs/spinorbit.md; checked by "
+    Key("section", "table", table=spinorbit_section.SECTION,
+        doc="surface of section for `attitude section` (docs/spinorbit.md; read by "
             "attitude.spinorbit.section)"),
-    Key("photometry", "any", schema=photometry_config.PHOTOMETRY_SCHEMA,
-        doc="lightcurve for `attitude lightcurve` (docs/photometry.md; checked by "
+    Key("photometry", "table", table=photometry_config.PHOTOMETRY,
+        doc="lightcurve for `attitude lightcurve` (docs/photometry.md; read by "
             "attitude.photometry.config)"),
 ), exactly_one=(("body", "ensemble"),), excludes=(("ensemble", ("body",)),))
 

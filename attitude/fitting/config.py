@@ -40,7 +40,7 @@ they are.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +51,8 @@ from ..foundations.errors import AttitudeError, ScenarioError
 from ..foundations.spec import Key, Table
 from ..model.regimes import PERIOD_KEYS
 from ..model.state import format_epoch
-from ..photometry.config import PHOTOMETRY_SCHEMA, parse_photometry
+from ..photometry.config import PHOTOMETRY as _PHOTOMETRY
+from ..photometry.config import parse_photometry
 from ..photometry.geometry import Geometry
 from ..photometry.readers import read_lightcurve
 from .leastsq import FitResult
@@ -67,7 +68,6 @@ __all__ = ["OBSERVATIONS", "LIGHTCURVE", "ObservationsConfig", "parse_observatio
            "fitted_scenario"]
 
 _FILE = (Key("file", "string", required=True, doc="CSV, path relative to the scenario"),)
-_PHOTOMETRY = PHOTOMETRY_SCHEMA["properties"]
 #: The keys of a lightcurve that mean what they mean in ``[photometry]``.
 _PHOTOMETRY_KEYS = ("shape", "axes", "length_unit", "subdivisions", "law", "sun",
                     "observer", "orbit", "light_time")
@@ -81,25 +81,17 @@ LIGHTCURVE = Table("lightcurve", (
         doc="magnitude 1-sigma where the file gives none"),
     Key("sessions", "boolean", default=True,
         doc="one magnitude offset per session of the file (false: one for all)"),
-    Key("shape", "string", default="ellipsoid",
-        doc="\"ellipsoid\" (from the body's moments, or axes) or an OBJ file"),
-    Key("axes", "quantity", unit="m", shape=(3,), positive=True,
-        doc="shape = \"ellipsoid\": explicit semi-axes"),
-    Key("subdivisions", "integer", bounds=(0, 8), default=2,
-        doc="ellipsoid mesh: 20 * 4**n faces"),
-    Key("length_unit", "unit", unit="m", default="m", doc="of the OBJ coordinates"),
-    Key("law", "any", schema=_PHOTOMETRY["law"], default="ls-lambert",
-        doc="scattering law: a name or { name = ..., parameters } (docs/photometry.md)"),
-    Key("sun", "quantity", unit="", shape=(3,),
-        doc="fixed direction body -> Sun, [state] frame"),
-    Key("observer", "any", schema=_PHOTOMETRY["observer"],
-        doc="fixed direction body -> observer; with an orbit \"earth\" (default) or "
-            "\"sun\""),
-    Key("orbit", "any", schema=_PHOTOMETRY["orbit"],
-        doc="the target's heliocentric Kepler elements: { mu, a, e, i, raan, argp, "
-            "mean_anomaly } (geometry per epoch)"),
-    Key("light_time", "boolean", default=True,
-        doc="with an orbit: model the attitude at the emission times"),
+    # the shape, law and geometry keys of [photometry], as it declares them
+    replace(_PHOTOMETRY["shape"], required=False, default="ellipsoid"),
+    _PHOTOMETRY["axes"],
+    replace(_PHOTOMETRY["subdivisions"], default=2),
+    _PHOTOMETRY["length_unit"],
+    replace(_PHOTOMETRY["law"], default="ls-lambert"),
+    replace(_PHOTOMETRY["sun"], doc="fixed direction body -> Sun, [state] frame"),
+    _PHOTOMETRY["observer"],
+    _PHOTOMETRY["orbit"],
+    replace(_PHOTOMETRY["light_time"],
+            doc="with an orbit: model the attitude at the emission times"),
 ), exactly_one=(("sun", "orbit"),), needs=(("sun", ("observer",)),
                                           ("light_time", ("orbit",))),
     doc="A lightcurve: the magnitudes, the shape and scattering law that make them, and the "

@@ -45,7 +45,7 @@ from astropy.time import Time
 
 from .errors import QuantityError
 
-__all__ = ["to_si", "to_time", "read_unit", "rev", "rpm", "TIME_SCALES"]
+__all__ = ["to_si", "to_time", "read_unit", "rev", "rpm", "TIME_SCALES", "DEFAULT_TIME_SCALE"]
 
 rev = u.def_unit(["rev", "revolution"], 2 * np.pi * u.rad, doc="one full turn")
 rpm = u.def_unit("rpm", rev / u.min, doc="revolutions per minute")
@@ -53,6 +53,12 @@ u.add_enabled_units([rev, rpm])
 
 #: Time scales :func:`to_time` accepts (astropy's, lower case).
 TIME_SCALES = tuple(s for s in Time.SCALES if s != "local")
+
+#: The time scale of an epoch given without one (a plain ISO 8601 string): TDB, the scale
+#: of the dynamics, everywhere -- ``AttitudeState``, scenario files, ``Lightcurve``.  Where
+#: times are naturally in another scale (observers' UTC in ALCDEF and CSV lightcurve files)
+#: the reader builds the epoch with that scale stated.
+DEFAULT_TIME_SCALE = "tdb"
 
 _HZ = u.Hz
 
@@ -106,7 +112,7 @@ def read_unit(text, *, key=None, like=None, error=QuantityError) -> u.UnitBase:
     >>> read_unit("kg", key="expect.x.unit", like="s")
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: expect.x.unit: unit 'kg' cannot be converted to 's' ...
+    attitude.foundations.errors.QuantityError: expect.x.unit: unit 'kg' cannot be converted ...
     """
     if isinstance(text, u.UnitBase):
         unit = text
@@ -252,11 +258,11 @@ def to_si(value, unit, *, key: str | None = None, shape=None, positive: bool = F
     >>> to_si([1, 2, 3], "s", key="propagation.duration", shape=())
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: propagation.duration: expected a single number ...
+    attitude.foundations.errors.QuantityError: propagation.duration: expected a single ...
     >>> to_si("-1 s", "s", key="propagation.step", positive=True)
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: propagation.step: must be positive, got -1 s
+    attitude.foundations.errors.QuantityError: propagation.step: must be positive, got -1 s
     """
     key = key if key is not None else name
     target = u.Unit(unit)
@@ -365,7 +371,8 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
         ``"2029-04-13T00:00:00"`` is read in ``scale``; ``{"value": "...", "scale":
         "utc"}`` carries its own scale.
     scale : str, optional
-        Time scale of a string (``"tdb"``, ``"utc"``, ...; default ``"tdb"``).
+        Time scale of a string (``"tdb"``, ``"utc"``, ...; default
+        :data:`DEFAULT_TIME_SCALE`, ``"tdb"``).
     key : str, optional
         The field, named by the error.
     error : type
@@ -395,7 +402,7 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
     >>> to_time("2023-02-30T00:00:00", key="state.epoch")
     Traceback (most recent call last):
     ...
-    attitude.errors.QuantityError: state.epoch: '2023-02-30T00:00:00' is not a date: day 30 ...
+    attitude.foundations.errors.QuantityError: state.epoch: '2023-02-30T00:00:00' is not a ...
     """
     if isinstance(value, Time):
         if not value.isscalar:
@@ -409,7 +416,7 @@ def to_time(value, *, scale: str | None = None, key: str | None = None,
         if "scale" in value:
             scale = value["scale"]
         value = value["value"]
-    scale = "tdb" if scale is None else scale
+    scale = DEFAULT_TIME_SCALE if scale is None else scale
     if not isinstance(scale, str) or scale.lower() not in TIME_SCALES:
         raise error(f"{scale!r} is not a time scale; use one of {', '.join(TIME_SCALES)}",
                     key=key)

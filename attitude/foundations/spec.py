@@ -30,7 +30,7 @@ Examples
 >>> validate({"duration": [1, 2, 3]}, prop, where="propagation", path="run.toml")
 Traceback (most recent call last):
 ...
-attitude.errors.AttitudeError: run.toml: propagation.duration: expected a single number ...
+attitude.foundations.errors.AttitudeError: run.toml: propagation.duration: expected a single ...
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .errors import AttitudeError
-from .quantities import read_unit, to_si, to_time
+from .quantities import DEFAULT_TIME_SCALE, read_unit, to_si, to_time
 
 __all__ = ["Key", "Table", "KINDS", "SYNONYMS", "validate", "json_schema", "markdown"]
 
@@ -97,7 +97,8 @@ class Key:
         checks itself (e.g. an array of numbers or a ``{min, max, count}`` table).
     scale_key : str
         For ``"time"`` keys: the sibling key holding the time scale (default
-        ``"time_scale"``; ``"tdb"`` when absent).
+        ``"time_scale"``; :data:`~attitude.foundations.quantities.DEFAULT_TIME_SCALE`,
+        ``"tdb"``, when absent).
 
     Examples
     --------
@@ -193,7 +194,7 @@ class Table:
     >>> validate({"rel_tol": 0.1, "abs_tol": 1.0}, t, where="expect.x")
     Traceback (most recent call last):
     ...
-    attitude.errors.AttitudeError: expect.x.abs_tol: give exactly one of rel_tol, abs_tol ...
+    attitude.foundations.errors.AttitudeError: expect.x.abs_tol: give exactly one of ...
     """
 
     name: str
@@ -398,8 +399,8 @@ def _value(value, key: Key, parent: Mapping, where: str, path, error):
         except AttitudeError as exc:
             raise error(exc.reason, key=exc.key, path=path) from None
     if kind == "time":
-        scale = parent.get(key.scale_key, "tdb")
-        scale = scale if isinstance(scale, str) else "tdb"
+        scale = parent.get(key.scale_key, DEFAULT_TIME_SCALE)
+        scale = scale if isinstance(scale, str) else DEFAULT_TIME_SCALE
         try:
             return to_time(value, scale=scale.lower(), key=where, error=error)
         except AttitudeError as exc:

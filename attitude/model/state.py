@@ -19,7 +19,7 @@ from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 from ..foundations.errors import InvalidStateError
-from ..foundations.quantities import to_si, to_time
+from ..foundations.quantities import DEFAULT_TIME_SCALE, to_si, to_time  # the one default
 from .body import RigidBody
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
@@ -31,9 +31,6 @@ INERTIAL_FRAMES = (
     "ICRF", "GCRF", "EME2000", "J2000", "ECLIPJ2000", "ECLIPTIC_J2000", "MOD", "TOD",
     "TEME", "SATURN_EQUATORIAL", "INERTIAL",
 )
-
-#: Time scale of an epoch given as a plain string (dynamics are best done in TDB).
-DEFAULT_TIME_SCALE = "tdb"
 
 #: A quaternion given by the user must have a norm within this of 1.
 QUATERNION_NORM_TOL = 1e-6

@@ -42,7 +42,8 @@ import astropy.units as u
 import numpy as np
 
 from attitude.foundations.errors import AttitudeError, ScenarioError
-from attitude.foundations.quantities import to_si
+from attitude.foundations.expectation import Expectation
+from attitude.foundations.spec import Key, Table, validate
 from attitude.model.orbit import KeplerOrbit
 from attitude.model.shape import Polyhedron
 from attitude.photometry.brightness import lightcurve
@@ -52,177 +53,98 @@ from attitude.photometry.periods import PeriodFit, fit_periods, lattice_combinat
 from attitude.photometry.scattering import FacetMaterials, scattering_law
 from attitude.propagation.propagator import propagate
 
-#: JSON Schema of the ``[photometry]`` table (declared in
-#: :data:`attitude.app.scenario_spec.SCENARIO`; :func:`parse_photometry` checks the same keys).
-PHOTOMETRY_SCHEMA = {
-    "type": "object",
-    "additionalProperties": False,
-    "required": [
-        "shape"
-    ],
-    "description": "photometry (attitude lightcurve): shape, scattering law, geometry, cadence; see docs/photometry.md",  # noqa: E501
-    "properties": {
-        "shape": {
-            "type": "string",
-            "description": "\"ellipsoid\" (from the body's moments, or axes) or an OBJ file"
-        },
-        "axes": {
-            "type": "array",
-            "minItems": 3,
-            "maxItems": 3
-        },
-        "length_unit": {
-            "type": "string"
-        },
-        "subdivisions": {
-            "type": "integer",
-            "minimum": 0,
-            "maximum": 8
-        },
-        "law": {
-            "oneOf": [
-                {
-                    "type": "string"
-                },
-                {
-                    "type": "object",
-                    "required": [
-                        "name"
-                    ]
-                }
-            ]
-        },
-        "materials": {
-            "type": "array",
-            "items": {
-                "type": "object",
-                "required": [
-                    "faces",
-                    "law"
-                ],
-                "additionalProperties": False,
-                "properties": {
-                    "faces": {
-                        "type": "array",
-                        "items": {
-                            "type": "integer"
-                        },
-                        "minItems": 2,
-                        "maxItems": 2
-                    },
-                    "law": {
-                        "oneOf": [
-                            {
-                                "type": "string"
-                            },
-                            {
-                                "type": "object",
-                                "required": [
-                                    "name"
-                                ]
-                            }
-                        ]
-                    }
-                }
-            }
-        },
-        "sun": {
-            "type": "array",
-            "items": {
-                "type": "number"
-            },
-            "minItems": 3,
-            "maxItems": 3
-        },
-        "observer": {
-            "oneOf": [
-                {
-                    "type": "array",
-                    "items": {
-                        "type": "number"
-                    },
-                    "minItems": 3,
-                    "maxItems": 3
-                },
-                {
-                    "enum": [
-                        "earth",
-                        "sun"
-                    ]
-                }
-            ]
-        },
-        "orbit": {
-            "type": "object"
-        },
-        "light_time": {
-            "type": "boolean"
-        },
-        "cadence": {
-            "type": [
-                "number",
-                "string"
-            ]
-        },
-        "noise": {
-            "type": [
-                "number",
-                "string"
-            ]
-        },
-        "seed": {
-            "type": "integer"
-        },
-        "shadows": {
-            "type": "boolean"
-        },
-        "periods": {
-            "enum": [
-                1,
-                2
-            ]
-        },
-        "order": {
-            "type": "integer",
-            "minimum": 1,
-            "maximum": 8
-        },
-        "output": {
-            "type": "string"
-        }
-    }
-}
-def _tolerance_schema(value: dict, description: str) -> dict:
-    """JSON Schema of a lightcurve expectation: ``value`` and one of the tolerances."""
-    return {"type": "object",
-            "properties": {"value": value, "unit": {"type": "string"},
-                           "rel_tol": {"type": "number", "minimum": 0},
-                           "abs_tol": {"type": "number", "minimum": 0}},
-            "additionalProperties": False, "required": ["value"],
-            "oneOf": [{"required": ["rel_tol"]}, {"required": ["abs_tol"]}],
-            "description": description}
+#: A scattering law: a name, or ``{ name = "hapke", parameters... }`` (checked by
+#: :func:`attitude.photometry.scattering.scattering_law`).
+_LAW_SCHEMA = {"oneOf": [{"type": "string"},
+                         {"type": "object", "required": ["name"]}]}
 
+#: One of ``[photometry] materials``: a range of faces with its own law.
+MATERIAL = Table("material", (
+    Key("faces", "any", required=True,
+        schema={"type": "array", "items": {"type": "integer"}, "minItems": 2, "maxItems": 2},
+        doc="[start, stop): face indices"),
+    Key("law", "any", required=True, schema=_LAW_SCHEMA, doc="the faces' scattering law"),
+))
 
-#: JSON Schemas of the lightcurve ``[expect]`` keys.
-EXPECT_SCHEMAS = {
-    "lightcurve_period": _tolerance_schema(
-        {"type": "number"}, "photometry: the double-peaked lightcurve period (default unit s)"),
-    "lightcurve_amplitude": _tolerance_schema(
-        {"type": "number"}, "photometry: peak-to-peak amplitude (default unit mag)"),
-    "lightcurve_lattice": _tolerance_schema(
-        {"type": "array", "items": {"type": "number"}, "minItems": 1},
-        "photometry: periods whose frequencies lie on the fitted lattice n1/P1 + n2/P2 "
-        "within rel_tol"),
-}
+#: The target's heliocentric orbit, ``orbit = { mu = ..., a = ..., e = ..., ... }``
+#: (:meth:`attitude.model.orbit.KeplerOrbit.from_elements`).
+ORBIT = Table("orbit", (
+    Key("mu", "quantity", unit="m3/s2", required=True, positive=True,
+        doc="gravitational parameter of the Sun (1.32712440018e20 m3/s2)"),
+    Key("a", "quantity", unit="m", required=True, positive=True, doc="semi-major axis"),
+    Key("e", "quantity", unit="", bounds=(0.0, None), default=0, doc="eccentricity, < 1"),
+    Key("i", "quantity", unit="rad", default=0, doc="inclination"),
+    Key("raan", "quantity", unit="rad", default=0, doc="longitude of the ascending node"),
+    Key("argp", "quantity", unit="rad", default=0, doc="argument of periapsis"),
+    Key("mean_anomaly", "quantity", unit="rad", default=0, doc="at the [state] epoch"),
+), doc="Keplerian elements in the inertial frame of the state")
+
+#: The ``[photometry]`` table (in :data:`attitude.app.scenario_spec.SCENARIO`; read by
+#: :func:`parse_photometry`, which also checks what a table cannot say: files, laws,
+#: directions).
+PHOTOMETRY = Table("photometry", (
+    Key("shape", "string", required=True,
+        doc="\"ellipsoid\" (from the body's moments, or axes) or an OBJ file"),
+    Key("axes", "quantity", unit="m", shape=(3,), positive=True,
+        doc="shape = \"ellipsoid\": explicit semi-axes"),
+    Key("length_unit", "unit", unit="m", default="m", doc="of the OBJ coordinates"),
+    Key("subdivisions", "integer", bounds=(0, 8), default=3,
+        doc="ellipsoid mesh: 20 * 4**n faces"),
+    Key("law", "any", schema=_LAW_SCHEMA, default="lommel-seeliger",
+        doc="scattering law: a name or { name = ..., parameters } (docs/photometry.md)"),
+    Key("materials", "tables", table=MATERIAL,
+        doc="face ranges with their own law (spacecraft)"),
+    Key("sun", "quantity", unit="", shape=(3,),
+        doc="fixed direction body -> Sun, inertial frame of the state"),
+    Key("observer", "any", schema={"oneOf": [
+        {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3},
+        {"enum": ["earth", "sun"]}]},
+        doc="fixed direction body -> observer; with an orbit \"earth\" (default) or "
+            "\"sun\""),
+    Key("orbit", "table", table=ORBIT,
+        doc="the target's heliocentric orbit (geometry per epoch)"),
+    Key("light_time", "boolean", default=True, doc="with an orbit: light-time corrected"),
+    Key("cadence", "quantity", unit="s", positive=True,
+        doc="sampling; default [propagation].step"),
+    Key("noise", "quantity", unit="mag", nonnegative=True,
+        doc="Gaussian noise added to the magnitudes; default none"),
+    Key("seed", "integer", doc="of the noise"),
+    Key("shadows", "boolean", default=False),
+    Key("periods", "integer", choices=(1, 2), default=2,
+        doc="1: Lomb-Scargle with harmonics; 2: Pravec et al. 2005"),
+    Key("order", "integer", bounds=(1, 8), default=4, doc="Fourier order of the fit"),
+    Key("output", "string", doc="netCDF of the lightcurve, relative to the scenario file"),
+), doc="photometry (attitude lightcurve): shape, scattering law, geometry, cadence; see "
+       "docs/photometry.md")
+
+#: The lightcurve ``[expect]`` keys (in :data:`attitude.app.scenario_spec.SCENARIO`; read by
+#: :func:`parse_photometry`).
+EXPECT = (
+    Key("lightcurve_period", "table", table=Expectation.table(
+        "lightcurve_period", unit="s", default_unit="s"),
+        doc="photometry: the double-peaked lightcurve period"),
+    Key("lightcurve_amplitude", "table", table=Expectation.table(
+        "lightcurve_amplitude", unit="mag", default_unit="mag"),
+        doc="photometry: peak-to-peak amplitude"),
+    Key("lightcurve_lattice", "table", table=Table("lightcurve_lattice", (
+        Key("value", "any", required=True, schema={
+            "type": "array", "items": {"type": "number"}, "minItems": 1},
+            doc="periods"),
+        Key("unit", "unit", unit="s", default="s"),
+        Key("rel_tol", "number", required=True, nonnegative=True,
+            doc="largest relative distance of a frequency from the lattice"))),
+        doc="photometry: periods whose frequencies lie on the fitted lattice n1/P1 + n2/P2 "
+            "within rel_tol"),
+)
 
 __all__ = ["PhotometryConfig", "LightcurveRun", "parse_photometry", "run_lightcurve",
-           "check_lightcurve", "EXPECT_KEYS"]
+           "check_lightcurve", "EXPECT", "EXPECT_KEYS", "PHOTOMETRY", "MATERIAL",
+           "ORBIT"]
 
 #: The lightcurve keys of ``[expect]``.
-EXPECT_KEYS = ("lightcurve_period", "lightcurve_amplitude", "lightcurve_lattice")
-_KEYS = ("shape", "axes", "length_unit", "subdivisions", "law", "materials", "sun",
-         "observer", "orbit", "light_time", "cadence", "noise", "seed", "shadows", "periods",
-         "order", "output")
+EXPECT_KEYS = tuple(k.name for k in EXPECT)
+#: The unit the run's value of each lightcurve key is computed in.
+_SI = {"lightcurve_period": u.s, "lightcurve_amplitude": u.mag, "lightcurve_lattice": u.s}
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,8 +180,8 @@ class PhotometryConfig:
     >>> cfg = sc.photometry
     >>> len(cfg.shape.faces), cfg.law.name, cfg.periods, cfg.order
     (80, 'lambert', 1, 2)
-    >>> cfg.expect[0]["key"], cfg.expect[0]["scale"]        # hours -> seconds
-    ('lightcurve_period', 3600.0)
+    >>> cfg.expect[0].key, cfg.expect[0].value, cfg.expect[0].unit
+    ('lightcurve_period', 1.0, 'h')
     """
 
     shape: Any
@@ -310,20 +232,11 @@ def parse_photometry(table: dict, expect: dict | None, path, body) -> Photometry
     (1280, Lambert(albedo=1.0))
     """
     path = Path(path)
-    if not isinstance(table, dict):
-        raise _fail(path, "photometry", "expected a table [photometry]")
-    unknown = sorted(set(table) - set(_KEYS))
-    if unknown:
-        raise _fail(path, f"photometry.{unknown[0]}", f"unknown key; allowed: {', '.join(_KEYS)}")
+    table = validate(table, PHOTOMETRY, where="photometry", path=str(path),
+                     error=ScenarioError)
 
     def key(k):
         return f"photometry.{k}"
-
-    def quantity(value, unit, k):
-        try:
-            return to_si(value, unit, name=key(k), error=ValueError)
-        except ValueError as exc:
-            raise _fail(path, key(k), str(exc).split(": ", 1)[-1]) from None
 
     def step(name, fn, *args):
         # ShapeModelError, PhotometryError, OrbitError -> ScenarioError naming the key
@@ -335,55 +248,29 @@ def parse_photometry(table: dict, expect: dict | None, path, body) -> Photometry
             inner = exc.key if exc.key in ("sun", "observer") else name
             raise _fail(path, key(inner), exc.reason) from None
 
-    shape = step("shape", _shape, table, path, body, quantity)
+    shape = step("shape", _shape, table, path, body)
     law = step("law", _law, table, path, len(shape.faces))
-    geometry = step("sun", _geometry, table, path, quantity)
-    cadence = quantity(table["cadence"], "s", "cadence") if "cadence" in table else None
-    if cadence is not None and not cadence > 0:
-        raise _fail(path, key("cadence"), f"must be positive, got {cadence} s")
-    noise = quantity(table.get("noise", 0.0), "mag", "noise")
-    if noise < 0:
-        raise _fail(path, key("noise"), f"must be >= 0, got {noise} mag")
-    periods = table.get("periods", 2)
-    if periods not in (1, 2) or isinstance(periods, bool):
-        raise _fail(path, key("periods"), f"expected 1 or 2, got {periods!r}")
-    order = table.get("order", 4)
-    if isinstance(order, bool) or not isinstance(order, int) or not 1 <= order <= 8:
-        raise _fail(path, key("order"), f"expected an integer in 1..8, got {order!r}")
-    shadows = table.get("shadows", False)
-    if not isinstance(shadows, bool):
-        raise _fail(path, key("shadows"), f"expected true or false, got {shadows!r}")
-    seed = table.get("seed")
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
-        raise _fail(path, key("seed"), f"expected an integer, got {seed!r}")
+    geometry = step("sun", _geometry, table, path)
     output = table.get("output")
-    if output is not None and not isinstance(output, str):
-        raise _fail(path, key("output"), "expected a file name")
-    return PhotometryConfig(shape=shape, law=law, geometry=geometry, cadence=cadence,
-                            noise=noise, seed=seed, shadows=shadows, periods=periods,
-                            order=order, output=path.parent / output if output else None,
+    return PhotometryConfig(shape=shape, law=law, geometry=geometry,
+                            cadence=table.get("cadence"), noise=table.get("noise", 0.0),
+                            seed=table.get("seed"), shadows=table.get("shadows", False),
+                            periods=table.get("periods", 2), order=table.get("order", 4),
+                            output=path.parent / output if output else None,
                             expect=_expect(expect or {}, path))
 
 
-def _shape(table, path, body, quantity):
-    spec = table.get("shape")
-    if spec is None:
-        raise _fail(path, "photometry.shape", "missing key: \"ellipsoid\" (from the body's "
-                                              "moments) or an OBJ file")
+def _shape(table, path, body):
+    spec = table["shape"]
     subdivisions = table.get("subdivisions", 3)
     if spec == "ellipsoid":
         if "axes" in table:
-            axes = quantity(table["axes"], "m", "axes")
-            if np.shape(axes) != (3,):
-                raise _fail(path, "photometry.axes", "expected three semi-axes")
-            return Polyhedron.ellipsoid(*axes, subdivisions=subdivisions)
+            return Polyhedron.ellipsoid(*table["axes"], subdivisions=subdivisions)
         shape = Polyhedron.ellipsoid_from_moments(body.principal_moments,
                                                   subdivisions=subdivisions)
         # principal frame -> body frame (the identity for bodies given by their moments)
         to_body = body.body_to_principal.inv()
         return Polyhedron(to_body.apply(np.array(shape.vertices)), shape.faces)
-    if not isinstance(spec, str):
-        raise _fail(path, "photometry.shape", "expected \"ellipsoid\" or an OBJ file name")
     return Polyhedron.from_obj(path.parent / spec, length_unit=table.get("length_unit", "m"))
 
 
@@ -401,14 +288,9 @@ def _law(table, path, n_faces):
     materials = table.get("materials")
     if materials is None:
         return law
-    if not isinstance(materials, list):
-        raise _fail(path, "photometry.materials", "expected a list of { faces = [start, "
-                                                  "stop], law = ... }")
     laws, index = [law], np.zeros(n_faces, dtype=int)
     for k, item in enumerate(materials):
         where = f"photometry.materials[{k}]"
-        if not isinstance(item, dict) or set(item) != {"faces", "law"}:
-            raise _fail(path, where, "expected { faces = [start, stop], law = ... }")
         faces = item["faces"]
         if not (isinstance(faces, list) and len(faces) == 2
                 and all(isinstance(x, int) for x in faces)
@@ -420,16 +302,10 @@ def _law(table, path, n_faces):
     return FacetMaterials(laws, index)
 
 
-def _geometry(table, path, quantity):
+def _geometry(table, path):
     if "orbit" in table:
-        orbit = table["orbit"]
-        if not isinstance(orbit, dict):
-            raise _fail(path, "photometry.orbit", "expected { mu = ..., a = ..., e = ... }")
         try:
-            kepler = KeplerOrbit.from_elements(**orbit)
-        except TypeError:
-            raise _fail(path, "photometry.orbit", "allowed keys: mu, a, e, i, raan, argp, "
-                                                  "mean_anomaly") from None
+            kepler = KeplerOrbit.from_elements(**table["orbit"])
         except AttitudeError as exc:
             raise _fail(path, f"photometry.orbit.{exc.key}", exc.reason) from None
         observer = table.get("observer", "earth")
@@ -446,31 +322,20 @@ def _geometry(table, path, quantity):
     return {"sun": table["sun"], "observer": table["observer"]}
 
 
-def _expect(expect, path):
-    parsed = []
-    for name in EXPECT_KEYS:
-        if name not in expect:
-            continue
-        spec = expect[name]
-        where = f"expect.{name}"
-        if not isinstance(spec, dict) or "value" not in spec \
-                or ("rel_tol" in spec) == ("abs_tol" in spec) \
-                or set(spec) - {"value", "unit", "rel_tol", "abs_tol"}:
-            raise _fail(path, where, "expected { value = ..., unit = ..., rel_tol = ... } "
-                                     "(or abs_tol)")
-        unit = spec.get("unit", "mag" if name == "lightcurve_amplitude" else "s")
-        try:
-            value = np.asarray(spec["value"], dtype=float)
-            scale = u.Unit(unit).to(u.mag if name == "lightcurve_amplitude" else u.s)
-        except (TypeError, ValueError, u.UnitsError) as exc:
-            raise _fail(path, where, f"bad value or unit ({exc})") from None
-        if (name == "lightcurve_lattice") != (value.ndim == 1):
-            raise _fail(path, f"{where}.value", "a list of periods for lightcurve_lattice, "
-                                                "a number otherwise")
-        parsed.append({"key": name, "expected": value.tolist(), "unit": unit,
-                       "scale": scale, "rel_tol": spec.get("rel_tol"),
-                       "abs_tol": spec.get("abs_tol")})
-    return tuple(parsed)
+def _expect(expect, path) -> tuple[Expectation, ...]:
+    """The lightcurve keys of an ``[expect]`` table as expectations."""
+    mine = {k: v for k, v in expect.items() if k in EXPECT_KEYS}
+    checked = validate(mine, Table("expect", EXPECT), where="expect", path=str(path),
+                       error=ScenarioError)
+    lattice = checked.get("lightcurve_lattice", {}).get("value", [1.0])
+    if not (isinstance(lattice, list) and lattice and all(
+            isinstance(p, (int, float)) and not isinstance(p, bool) and np.isfinite(p)
+            and p > 0 for p in lattice)):
+        raise _fail(path, "expect.lightcurve_lattice.value",
+                    f"expected a list of periods (positive numbers), got {lattice!r}"[:200])
+    default = {"lightcurve_amplitude": "mag"}
+    return tuple(Expectation.from_table(k, checked[k], default_unit=default.get(k, "s"))
+                 for k in EXPECT_KEYS if k in checked)
 
 
 @dataclass(frozen=True, eq=False)
@@ -636,30 +501,25 @@ def check_lightcurve(specs, fit: PeriodFit, lc: Lightcurve) -> list[dict]:
     ... ''')
     >>> sc = load_scenario(path)          # a triaxial ellipsoid spinning once an hour
     >>> run = run_lightcurve(sc, sc.photometry, write=False)
-    >>> spec = dict(sc.photometry.expect[0], expected=1.1)   # a wrong period: 1.1 h
-    >>> [(r["key"], r["ok"]) for r in check_lightcurve([spec], run.fit, run.lightcurve)]
+    >>> import dataclasses
+    >>> wrong = dataclasses.replace(sc.photometry.expect[0], value=1.1)   # 1.1 h
+    >>> [(r["key"], r["ok"]) for r in check_lightcurve([wrong], run.fit, run.lightcurve)]
     [('lightcurve_period', False)]
     """
     results = []
-    for spec in specs:
-        name, scale = spec["key"], spec["scale"]
-        expected = spec["expected"]
-        out = {"key": name, "expected": expected, "unit": spec["unit"]}
-        if name == "lightcurve_lattice":
+    for e in specs:
+        scale = u.Unit(e.unit).to(_SI[e.key])
+        if e.key == "lightcurve_lattice":
             # the largest relative distance of the listed frequencies from the lattice
             errors = [lattice_combination(1.0 / (p * scale), *fit.frequencies,
                                           max_order=fit.order)[2]
-                      for p in expected] if fit.n_periods == 2 else [np.inf]
-            tol = spec["rel_tol"] if spec["rel_tol"] is not None else np.inf
-            out.update(expected=0.0, unit="(relative distance from the lattice)",
-                       periods=expected, period_unit=spec["unit"], got=float(max(errors)),
-                       tolerance=float(tol), ok=bool(max(errors) <= tol))
+                      for p in e.value] if fit.n_periods == 2 else [np.inf]
+            distance = Expectation(e.key, 0.0, "(relative distance from the lattice)",
+                                   abs_tol=float(e.rel_tol),
+                                   reported=(("periods", list(e.value)),
+                                             ("period_unit", e.unit)))
+            results.append(distance.check(float(max(errors))))
         else:
-            got = fit.lightcurve_period / scale if name == "lightcurve_period" \
-                else lc.amplitude() / scale
-            tol = spec["abs_tol"] if spec["abs_tol"] is not None \
-                else spec["rel_tol"] * abs(expected)
-            out.update(got=float(got), tolerance=float(tol),
-                       ok=bool(abs(got - expected) <= tol))
-        results.append(out)
+            got = fit.lightcurve_period if e.key == "lightcurve_period" else lc.amplitude()
+            results.append(e.check(float(got / scale)))
     return results

@@ -31,6 +31,7 @@ import xarray as xr
 from astropy.time import Time
 
 from attitude.foundations.errors import LightcurveFormatError
+from attitude.foundations.quantities import to_time
 from attitude.model.ephemeris import file_encoding, write_atomically
 from attitude.version import __version__
 
@@ -74,7 +75,7 @@ class Lightcurve:
 
     @classmethod
     def from_arrays(cls, time, flux=None, *, magnitude=None, magnitude_error=None,
-                    session=None, phase_angle=None, epoch: Time, frame: str = "",
+                    session=None, phase_angle=None, epoch: Time | str, frame: str = "",
                     law: str = "", sun_distance=None, observer_distance=None,
                     light_time=None, facet_flux=None, title: str = "lightcurve",
                     source: str = "", attrs: dict | None = None) -> Lightcurve:
@@ -90,8 +91,11 @@ class Lightcurve:
             m, m, s; per epoch or scalars.
         session : array_like of int, optional
         facet_flux : array_like, shape (n, n_faces), optional
-        epoch : astropy Time
-            The time of ``time = 0``, with its scale.
+        epoch : astropy Time or str
+            The time of ``time = 0``, with its scale; an ISO 8601 string is read by
+            :func:`attitude.foundations.quantities.to_time` in its default scale, TDB (as
+            ``AttitudeState`` reads it).  Observed times in UTC come as a ``Time`` with
+            ``scale="utc"`` (what :func:`attitude.read_lightcurve` builds).
         frame, law, title, source : str
         attrs : dict, optional
             More global attributes.
@@ -122,7 +126,7 @@ class Lightcurve:
         if facet_flux is not None:
             variables["facet_flux"] = xr.Variable(("time", "face"), np.asarray(facet_flux),
                                                   _ATTRS["facet_flux"])
-        epoch = Time(epoch)
+        epoch = to_time(epoch, key="epoch", error=LightcurveFormatError, precision=None)
         stamp = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
         ds_attrs = {"epoch": _isot(epoch), "time_scale": epoch.scale.upper(), "frame": frame,
                     "law": law, "Conventions": "CF-1.10", "title": title,
@@ -153,9 +157,11 @@ class Lightcurve:
 
     @property
     def epoch(self) -> Time:
-        """The astropy Time of ``time = 0``."""
-        return Time(self._dataset.attrs["epoch"],
-                    scale=self._dataset.attrs.get("time_scale", "utc").lower())
+        """The astropy Time of ``time = 0`` (the ``epoch`` attribute in ``time_scale``;
+        without one, :func:`attitude.foundations.quantities.to_time`'s default, TDB)."""
+        attrs = self._dataset.attrs
+        return to_time(attrs["epoch"], scale=attrs.get("time_scale"), key="epoch",
+                       error=LightcurveFormatError, precision=None)
 
     def __len__(self) -> int:
         return self._dataset.sizes["time"]

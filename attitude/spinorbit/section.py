@@ -32,9 +32,11 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..foundations.errors import SpinOrbitError
+from ..foundations.errors import AttitudeError, SpinOrbitError
+from ..foundations.expectation import Expectation
 from ..foundations.figures import agg_figure
 from ..foundations.quantities import to_si
+from ..foundations.spec import Key, Table, json_schema, validate
 from ..model.ephemeris import write_atomically
 from ..model.orbit import KeplerOrbit
 from ..model.torques import GravityGradient, SumTorque
@@ -42,73 +44,57 @@ from .libration import long_axis_angle, measure_libration
 from .model import SpinOrbit
 from .planar import periodic_orbit
 
-#: A grid axis of the ``[section]`` table: a list, or ``{min, max, count, unit}``.
+#: The ``{min, max, count, unit}`` form of a grid axis of the ``[section]`` table.
+GRID = Table("grid", (
+    Key("min", "number", required=True),
+    Key("max", "number", required=True),
+    Key("count", "integer", required=True, positive=True),
+    Key("unit", "unit", doc="angles: default rad"),
+))
+#: A grid axis: a list of numbers, or :data:`GRID` (checked by :func:`parse_section`).
 _GRID_SCHEMA = {"oneOf": [
     {"type": "array", "items": {"type": "number"}, "minItems": 1},
-    {"type": "object", "properties": {"min": {"type": "number"}, "max": {"type": "number"},
-                                      "count": {"type": "integer", "minimum": 1},
-                                      "unit": {"type": "string"}},
-     "required": ["min", "max", "count"], "additionalProperties": False},
+    json_schema(GRID, root=False),
 ]}
-#: JSON Schema of the ``[section]`` table (declared in
-#: :data:`attitude.app.scenario_spec.SCENARIO`; :func:`parse_section` checks the same keys).
-SECTION_SCHEMA = {
-    "type": "object",
-    "description": ("Spin-orbit surface of section (attitude section): grid of initial "
-                    "conditions at periapsis, angles (rad or {min, max, count, unit}) and "
-                    "rates (spin rate / mean motion)."),
-    "properties": {"n_orbits": {"type": "integer", "minimum": 1},
-                   "angles": _GRID_SCHEMA, "rates": _GRID_SCHEMA,
-                   "lyapunov": {"type": "boolean"},
-                   "rtol": {"type": "number"},
-                   "seed": {"type": "integer", "minimum": 0},
-                   "netcdf": {"type": "string"}},
-    "required": ["angles", "rates"],
-    "additionalProperties": False
-}
-#: JSON Schemas of the spin-orbit ``[expect]`` keys.
-EXPECT_SCHEMAS = {
-    "libration_amplitude": {
-        "type": "object",
-        "description": "Forced libration in longitude measured from the run (spin-orbit wing).",
-        "properties": {
-            "value": {
-                "type": "number",
-                "minimum": 0
-            },
-            "unit": {
-                "type": "string"
-            },
-            "rel_tol": {
-                "type": "number",
-                "minimum": 0
-            },
-            "abs_tol": {
-                "type": "number",
-                "minimum": 0
-            }
-        },
-        "required": [
-            "value"
-        ],
-        "additionalProperties": False
-    },
-    "resonance": {
-        "type": "string",
-        "pattern": "^(none|[0-9]+:[0-9]+)$",
-        "description": "The p:q spin-orbit state of the run (\"1:1\", \"3:2\", or \"none\")."
-    }
-}
 
-__all__ = ["EXPECT_KEYS", "SECTION_KEYS", "SectionConfig", "parse_expect",
-           "parse_section", "load_tables", "spin_orbit_of", "expectation_values",
+#: The ``[section]`` table (in :data:`attitude.app.scenario_spec.SCENARIO`; read by
+#: :func:`parse_section`).
+SECTION = Table("section", (
+    Key("n_orbits", "integer", bounds=(1, 100_000), default=200, doc="map iterations"),
+    Key("angles", "any", required=True, schema=_GRID_SCHEMA,
+        doc="long-axis angle from periapsis: a list (rad) or { min, max, count, unit }"),
+    Key("rates", "any", required=True, schema=_GRID_SCHEMA,
+        doc="spin rate / mean motion: a list or { min, max, count }"),
+    Key("lyapunov", "boolean", default=True, doc="chaotic / regular verdicts"),
+    Key("rtol", "number", bounds=(1e-14, 1e-3), default=1e-9,
+        doc="integrator tolerance, below 1e-3"),
+    Key("seed", "integer", nonnegative=True, default=0),
+    Key("netcdf", "string", doc="relative to the scenario file"),
+), doc="Spin-orbit surface of section (attitude section): grid of initial conditions at "
+       "periapsis, angles (rad or {min, max, count, unit}) and rates (spin rate / mean "
+       "motion).")
+
+#: The spin-orbit ``[expect]`` keys (in :data:`attitude.app.scenario_spec.SCENARIO`; read by
+#: :func:`parse_expect`).
+EXPECT = (
+    Key("libration_amplitude", "table", table=Expectation.table(
+        "libration_amplitude", unit="rad", default_unit="rad",
+        value=Key("value", "number", required=True, nonnegative=True)),
+        doc="Forced libration in longitude measured from the run (spin-orbit wing)."),
+    Key("resonance", "string",
+        schema={"type": "string", "pattern": "^(none|[0-9]+:[0-9]+)$"},
+        doc="The p:q spin-orbit state of the run (\"1:1\", \"3:2\", or \"none\")."),
+)
+
+__all__ = ["EXPECT", "EXPECT_KEYS", "GRID", "SECTION", "SECTION_KEYS", "SectionConfig",
+           "parse_expect", "parse_section", "load_tables", "spin_orbit_of", "expectation_values",
            "mean_spin_resonance", "run_section", "write_section", "island_centres",
            "section_figure"]
 
 #: ``[expect]`` keys owned by the spin-orbit wing.
-EXPECT_KEYS = ("libration_amplitude", "resonance")
+EXPECT_KEYS = tuple(k.name for k in EXPECT)
 #: Keys of the ``[section]`` table.
-SECTION_KEYS = ("n_orbits", "angles", "rates", "lyapunov", "rtol", "seed", "netcdf")
+SECTION_KEYS = SECTION.names()
 
 Fail = Callable[[str, str], Exception]
 
@@ -119,7 +105,16 @@ def _fail_default(key: str, message: str) -> Exception:
 
 # --- [expect] ---------------------------------------------------------------------------
 
-def parse_expect(key: str, spec, fail: Fail = _fail_default) -> dict:
+def _checked(table, spec: Table, where: str, fail: Fail) -> dict:
+    """``table`` validated against ``spec`` (:func:`attitude.foundations.spec.validate`),
+    its errors raised by ``fail(key, message)``."""
+    try:
+        return validate(table, spec, where=where, error=SpinOrbitError)
+    except AttitudeError as exc:
+        raise fail(exc.key, exc.reason) from None
+
+
+def parse_expect(key: str, spec, fail: Fail = _fail_default) -> Expectation:
     """Validate one spin-orbit ``[expect]`` entry at load time.
 
     ``libration_amplitude = { value = 1.14, unit = "deg", rel_tol = 0.05 }`` (or
@@ -129,37 +124,20 @@ def parse_expect(key: str, spec, fail: Fail = _fail_default) -> dict:
 
     Examples
     --------
-    >>> parse_expect("libration_amplitude", {"value": 1.2, "unit": "deg", "rel_tol": 0.1})
+    >>> e = parse_expect("libration_amplitude", {"value": 1.2, "unit": "deg", "rel_tol": 0.1})
+    >>> e.entry()
     {'key': 'libration_amplitude', 'expected': 1.2, 'unit': 'deg', 'tolerance': 0.12}
     """
     where = f"expect.{key}"
+    if key not in EXPECT_KEYS:
+        raise fail(where, f"not a spin-orbit expectation (known: {', '.join(EXPECT_KEYS)})")
     if key == "resonance":
         if not isinstance(spec, str) or not _ratio(spec):
             raise fail(where, f"expected a string \"p:q\" such as \"1:1\" or \"3:2\", or "
                               f"\"none\", got {spec!r}")
-        return {"key": key, "expected": spec.strip().replace(" ", "")}
-    if key == "libration_amplitude":
-        if not isinstance(spec, Mapping):
-            raise fail(where, "expected { value = 1.2, unit = \"deg\", rel_tol = 0.1 }")
-        extra = set(spec) - {"value", "unit", "rel_tol", "abs_tol"}
-        if extra:
-            raise fail(f"{where}.{sorted(extra)[0]}", "unknown key; allowed: value, unit, "
-                                                      "rel_tol, abs_tol")
-        if ("rel_tol" in spec) == ("abs_tol" in spec):
-            raise fail(where, "give exactly one of rel_tol, abs_tol")
-        unit = spec.get("unit", "rad")
-        try:
-            to_si(f"1 {unit}", "rad", name="unit")
-            value = float(spec["value"])
-            tol = float(spec.get("rel_tol", spec.get("abs_tol")))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise fail(where, f"expected a numeric value and tolerance and an angle unit "
-                              f"({exc})") from None
-        if not (math.isfinite(value) and value >= 0 and math.isfinite(tol) and tol >= 0):
-            raise fail(where, "value and tolerance must be finite and >= 0")
-        tolerance = tol * value if "rel_tol" in spec else tol
-        return {"key": key, "expected": value, "unit": unit, "tolerance": tolerance}
-    raise fail(where, f"not a spin-orbit expectation (known: {', '.join(EXPECT_KEYS)})")
+        return Expectation.exact(key, spec.strip().replace(" ", ""))
+    table = _checked({key: spec}, Table("expect", EXPECT), "expect", fail)[key]
+    return Expectation.from_table(key, table, default_unit="rad")
 
 
 def _ratio(text: str) -> tuple[int, int] | None:
@@ -255,7 +233,7 @@ def expectation_values(scenario, ephemeris) -> dict:
     >>> got["resonance"], round(got["libration_amplitude"], 2)
     ('1:1', 1.14)
     """
-    wanted = {e["key"]: e for e in scenario.expect if e["key"] in EXPECT_KEYS}
+    wanted = {e.key: e for e in scenario.expect if e.key in EXPECT_KEYS}
     if not wanted:
         return {}
     out = dict.fromkeys(wanted)
@@ -266,7 +244,7 @@ def expectation_values(scenario, ephemeris) -> dict:
     if "libration_amplitude" in wanted:
         try:
             m = measure_libration(ephemeris, so.orbit)
-            unit = wanted["libration_amplitude"]["unit"]
+            unit = wanted["libration_amplitude"].unit
             out["libration_amplitude"] = m.amplitude / to_si(f"1 {unit}", "rad", name="unit")
         except SpinOrbitError:
             pass
@@ -312,20 +290,13 @@ def _axis(spec, key: str, unit: str, fail: Fail) -> tuple[np.ndarray, bool]:
         return values, True
     if not isinstance(spec, Mapping):
         raise fail(key, "expected { min = ..., max = ..., count = ... } or a list")
-    extra = set(spec) - {"min", "max", "count", "unit"}
-    if extra:
-        raise fail(f"{key}.{sorted(extra)[0]}", "unknown key; allowed: min, max, count, unit")
+    spec = _checked(spec, GRID, key, fail)
     try:
         scale = 1.0 if unit == "" else to_si(f"1 {spec.get('unit', unit)}", unit,
-                                             name=f"{key}.unit")
-        lo, hi = float(spec["min"]) * scale, float(spec["max"]) * scale
-        count = spec["count"]
-    except KeyError as exc:
-        raise fail(f"{key}.{exc.args[0]}", "missing key") from None
-    except (TypeError, ValueError) as exc:
-        raise fail(key, f"expected numbers and an angle unit ({exc})") from None
-    if not isinstance(count, int) or isinstance(count, bool) or count < 1:
-        raise fail(f"{key}.count", f"expected a positive integer, got {count!r}")
+                                             key=f"{key}.unit")
+    except AttitudeError as exc:
+        raise fail(f"{key}.unit", exc.reason) from None
+    lo, hi, count = spec["min"] * scale, spec["max"] * scale, spec["count"]
     if not (math.isfinite(lo) and math.isfinite(hi) and hi >= lo):
         raise fail(key, f"expected finite min <= max, got {spec.get('min')!r}, "
                         f"{spec.get('max')!r}")
@@ -345,12 +316,7 @@ def parse_section(table, folder: Path | None = None, fail: Fail = _fail_default
     """
     if not isinstance(table, Mapping):
         raise fail("section", "expected a table [section]")
-    for k in table:
-        if k not in SECTION_KEYS:
-            raise fail(f"section.{k}", f"unknown key; allowed: {', '.join(SECTION_KEYS)}")
-    for k in ("angles", "rates"):
-        if k not in table:
-            raise fail(f"section.{k}", "missing key")
+    table = _checked(table, SECTION, "section", fail)
     a, a_list = _axis(table["angles"], "section.angles", "rad", fail)
     r, r_list = _axis(table["rates"], "section.rates", "", fail)
     if a_list and r_list and a.size == r.size:
@@ -359,22 +325,12 @@ def parse_section(table, folder: Path | None = None, fail: Fail = _fail_default
         A, R = np.meshgrid(a, r, indexing="ij")
         angles, rates = A.ravel(), R.ravel()
     n_orbits = table.get("n_orbits", 200)
-    if not isinstance(n_orbits, int) or isinstance(n_orbits, bool) or not \
-            1 <= n_orbits <= 100_000:
-        raise fail("section.n_orbits", f"expected an integer in [1, 100000], got "
-                                       f"{n_orbits!r}")
     lyap = table.get("lyapunov", True)
-    if not isinstance(lyap, bool):
-        raise fail("section.lyapunov", f"expected true or false, got {lyap!r}")
     rtol = table.get("rtol", 1e-9)
-    if not isinstance(rtol, float) or not 1e-14 <= rtol < 1e-3:
+    if not rtol < 1e-3:
         raise fail("section.rtol", f"expected a float in [1e-14, 1e-3), got {rtol!r}")
     seed = table.get("seed", 0)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise fail("section.seed", f"expected a non-negative integer, got {seed!r}")
     netcdf = table.get("netcdf")
-    if netcdf is not None and not isinstance(netcdf, str):
-        raise fail("section.netcdf", f"expected a string, got {netcdf!r}")
     path = None if netcdf is None else (Path(folder or ".") / netcdf)
     return SectionConfig(angles=angles, rates=rates, n_orbits=n_orbits, lyapunov=lyap,
                          rtol=rtol, seed=seed, netcdf=path)
@@ -410,7 +366,7 @@ def load_tables(doc: Mapping, *, body, torques, expect, ensemble=None,
     section = None
     if "section" in doc:
         section = parse_section(doc["section"], folder, fail)
-    keys = [e["key"] for e in expect if e["key"] in EXPECT_KEYS]
+    keys = [e.key for e in expect if e.key in EXPECT_KEYS]
     if keys and ensemble is not None:
         raise fail(f"expect.{keys[0]}", "not for [ensemble] scenarios (one body on one "
                                         "orbit)")
