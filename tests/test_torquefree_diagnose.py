@@ -282,9 +282,9 @@ def test_diagnosis_moved_to_freebody_old_paths_warn():
 
     for name in ("diagnose", "diagnose_principal", "diagnose_many", "branch_of",
                  "Diagnosis"):
-        with pytest.warns(DeprecationWarning, match=f"use attitude.freebody.{name}"):
+        with pytest.warns(DeprecationWarning, match=f"use attitude.model.freebody.{name}"):
             assert getattr(tf, name) is getattr(fb, name)
     assert attitude.diagnose is fb.diagnose
     old = importlib.import_module("attitude.propagation.elliptic")
-    with pytest.warns(DeprecationWarning, match="use attitude.elliptic.cel"):
+    with pytest.warns(DeprecationWarning, match="use attitude.foundations.elliptic.cel"):
         assert old.cel is importlib.import_module("attitude.foundations.elliptic").cel
