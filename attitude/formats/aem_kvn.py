@@ -166,6 +166,8 @@ class _KvnReader:
 
 
 def parse_kvn(text: str, where: str) -> Message:
+    """The :class:`~.aem_message.Message` of a KVN AEM's text (``where``: the file, for the
+    errors)."""
     lines = text.splitlines()
     it = ((i, s.strip()) for i, s in enumerate(lines, 1))
     it = ((i, s) for i, s in it if s)
@@ -207,6 +209,7 @@ def _kvn_segment(where: str, meta: Block, spec: Spec, data_start: int,
 
 
 def write_kvn(tmp: Path, out: Output) -> None:
+    """Write ``out`` as KVN to the (temporary) file ``tmp``."""
     with open(tmp, "w", encoding="ascii", newline="\n") as fh:
         fh.write(f"CCSDS_AEM_VERS = {CCSDS_AEM_VERS}\n")
         for c in out.header_comments:

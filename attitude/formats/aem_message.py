@@ -190,6 +190,8 @@ def error_at(where: str, line: int | None, keyword: str, message: str) -> Epheme
 
 
 def warn_at(where: str, line: int | None, keyword: str, message: str) -> None:
+    """An :class:`~attitude.AttitudeWarning` ``"<file>, line <n>: <KEYWORD>: <message>"``,
+    attributed to the frame two above the function that calls this one."""
     loc = f"{where}, line {line}" if line else where
     warnings.warn(f"{loc}: {keyword}: {message}", AttitudeWarning, stacklevel=3)
 
@@ -256,6 +258,9 @@ class Spec:
 
 @dataclass
 class Segment:
+    """One segment as read: its metadata, how to read it, the line of its data block, and
+    per data line the line number, the epoch text and the values."""
+
     meta: Block
     spec: Spec
     data_line: int
@@ -266,6 +271,8 @@ class Segment:
 
 @dataclass
 class Message:
+    """A parsed AEM: the file, its form (KVN or XML), version, header and segments."""
+
     where: str
     form: str
     version: str
@@ -279,6 +286,7 @@ def norm_text(value: str) -> str:
 
 
 def parse_version(where: str, line: int, value: str) -> str:
+    """``CCSDS_AEM_VERS`` as ``"1.0"`` or ``"2.0"``; any other version is an error."""
     try:
         v = float(value)
     except ValueError:
@@ -291,6 +299,8 @@ def parse_version(where: str, line: int, value: str) -> str:
 
 
 def euler_sequence(value: str, where: str = "", line: int | None = None) -> str:
+    """``EULER_ROT_SEQ`` as three axis letters (``ZXZ``; version 1 digits ``313``
+    accepted), checked."""
     seq = value.strip().upper()
     if re.fullmatch(r"[123]{3}", seq):
         seq = "".join(_DIGIT_AXES[c] for c in seq)
@@ -444,6 +454,7 @@ def metadata_block(where: str, version: str, start: int, entries: Sequence[tuple
 
 
 def parse_number(token: str, where: str, line: int, name: str) -> float:
+    """A finite float from the text of a data item (an error naming the item otherwise)."""
     try:
         x = float(token)
     except ValueError:

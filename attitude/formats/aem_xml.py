@@ -88,6 +88,8 @@ def _xml_tree(data: bytes, where: str) -> _Node:
 
 
 def parse_xml(data: bytes, where: str) -> Message:
+    """The :class:`~.aem_message.Message` of an XML AEM (``where``: the file, for the
+    errors)."""
     root = _xml_tree(data, where)
     if root.tag == "ndm":
         aems = [c for c in root.children if c.tag == "aem"]
@@ -197,6 +199,7 @@ def _xml_segment(where: str, meta: Block, spec: Spec, data: _Node) -> Segment:
 
 
 def write_xml(tmp: Path, out: Output) -> None:
+    """Write ``out`` as XML to the (temporary) file ``tmp``."""
     with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
         fh.write('<?xml version="1.0" encoding="UTF-8"?>\n'
                  '<aem xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"\n'
