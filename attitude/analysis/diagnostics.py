@@ -26,10 +26,10 @@ reference axis about ``L``, ``theta`` the nutation angle between them, ``psi`` t
 rotation angle about the reference axis (D 2-4).
 
 The diagnostics live in three modules, one idea each, all re-exported here:
-:mod:`.angles` (the principal-frame series, its invariants and the Euler angles in the
-angular-momentum frame), :mod:`.periods` (measured periods) and :mod:`.drift`
-(conservation drift and attitude noise); this module adds them to an ephemeris as
-dataset variables (:func:`add_diagnostics`).
+:mod:`attitude.analysis.angles` (the principal-frame series, its invariants and the
+Euler angles in the angular-momentum frame), :mod:`attitude.analysis.periods` (measured
+periods) and :mod:`attitude.analysis.drift` (conservation drift and attitude noise);
+this module adds them to an ephemeris as dataset variables (:func:`add_diagnostics`).
 """
 
 from __future__ import annotations
