@@ -48,7 +48,14 @@ from .angles import (  # noqa: F401  (momentum_frame_x: app.plot imports it from
     reference_axis_for,
 )
 from .drift import attitude_noise, conservation_drift
-from .periods import MAX_ANGLE_STEP, MIN_NUTATION, STENCIL, MeasuredPeriod, measure_periods
+from .periods import (  # noqa: F401  (HYSTERESIS: a constant this module offered)
+    HYSTERESIS,
+    MAX_ANGLE_STEP,
+    MIN_NUTATION,
+    STENCIL,
+    MeasuredPeriod,
+    measure_periods,
+)
 
 __all__ = [
     "PrincipalSeries",
