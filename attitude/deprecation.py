@@ -72,7 +72,7 @@ def moved_attribute(module: str, name: str):
     >>> with warnings.catch_warnings(record=True) as caught:
     ...     warnings.simplefilter("always")
     ...     cls = moved_attribute("attitude.propagation.splitting", "BodyBatch")
-    >>> cls.__module__, str(caught[0].message).endswith("use attitude.body.BodyBatch")
+    >>> cls.__module__, str(caught[0].message).endswith("use attitude.model.body.BodyBatch")
     ('attitude.model.body', True)
     """
     new = MOVED_NAMES.get((module, name))
