@@ -97,8 +97,9 @@ class DeprecatedModule(types.ModuleType):
     >>> with warnings.catch_warnings(record=True) as caught:
     ...     warnings.simplefilter("always")
     ...     read_aem = alias.read_aem
-    >>> read_aem.__module__
-    'attitude.formats.aem'
+    >>> import attitude.formats.aem as new
+    >>> read_aem is new.read_aem
+    True
     >>> print(caught[0].category.__name__, caught[0].message)
     DeprecationWarning attitude.aem is deprecated; use attitude.formats.aem.read_aem
     """

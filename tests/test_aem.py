@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude.formats import aem
+from attitude.formats import aem_message, aem_write
 from attitude.formats.aem import AEM_WRITE_TYPES, convert, read_aem, write_aem
 from attitude.foundations.errors import AttitudeWarning, EphemerisFormatError
 
@@ -860,7 +860,7 @@ def test_data_outside_start_stop_time_warns(tmp_path):
 @settings(max_examples=300, deadline=None)
 @given(st.floats(allow_nan=False, allow_infinity=False, min_value=-1e300, max_value=1e300))
 def test_numbers_have_at_most_16_digits_and_read_back(x):
-    s = aem._fmt(x)
+    s = aem_message._fmt(x)
     mantissa = s.split("e")[0]
     assert re.fullmatch(r"-?\d+\.\d+", mantissa) and sum(c.isdigit() for c in mantissa) <= 16
     y = float(s)
@@ -868,7 +868,7 @@ def test_numbers_have_at_most_16_digits_and_read_back(x):
 
 
 def test_chunked_writing_keeps_every_line(tumbling, tmp_path, monkeypatch):
-    monkeypatch.setattr(aem, "_CHUNK", 3)
+    monkeypatch.setattr(aem_message, "_CHUNK", 3)
     path = write_aem(tumbling, tmp_path / "e.aem")
     epochs = [r[0] for r in _data_lines(path)]
     expected = tumbling.times.copy()
@@ -897,7 +897,7 @@ def test_a_crash_while_writing_leaves_no_file_and_keeps_the_old_one(tumbling, tm
                                                                     monkeypatch):
     """The data lines fail half-way (the header is already written): no AEM, no temporary
     file, and a file already at the destination is untouched."""
-    real = aem.format_epoch
+    real = aem_write.format_epoch
     calls = {"n": 0}
 
     def failing(times, digits=9):
@@ -906,7 +906,8 @@ def test_a_crash_while_writing_leaves_no_file_and_keeps_the_old_one(tumbling, tm
             raise KeyboardInterrupt("simulated crash")
         return real(times, digits)
 
-    monkeypatch.setattr(aem, "format_epoch", failing)
+    monkeypatch.setattr(aem_write, "format_epoch", failing)      # START/STOP_TIME
+    monkeypatch.setattr(aem_message, "format_epoch", failing)    # the data lines
     with pytest.raises(KeyboardInterrupt):
         write_aem(tumbling, tmp_path / "crash.aem")
     assert list(tmp_path.iterdir()) == []

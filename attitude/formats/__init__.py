@@ -1,10 +1,48 @@
 """File formats other tools read and write, beside the ephemeris's own CF netCDF
 (:meth:`attitude.Ephemeris.to_netcdf`):
 
-- :mod:`.aem`: CCSDS Attitude Ephemeris Messages, KVN and XML (read and write);
+- :mod:`.aem`: CCSDS Attitude Ephemeris Messages, KVN and XML (read and write:
+  :func:`read_aem`, :func:`write_aem`); the encodings and conversions behind them are
+  in :mod:`.aem_message`, :mod:`.aem_kvn`, :mod:`.aem_xml`, :mod:`.aem_kinematics`,
+  :mod:`.aem_read` and :mod:`.aem_write`;
 - :mod:`.spice`: SPICE C-kernels (type 3), with spiceypy
-  (``pip install "attitude-dynamics[spice]"``);
-- :mod:`.streaming`: netCDF written epoch block by epoch block, for runs longer than memory.
+  (``pip install "attitude-dynamics[spice]"``, imported only when a kernel is written);
+- :mod:`.streaming`: netCDF written epoch block by epoch block, for runs longer than memory;
+- :mod:`.conversion`: :func:`convert`, the engine of ``attitude convert IN OUT``.
 
-:func:`attitude.formats.aem.convert` is the engine of ``attitude convert IN OUT``.
+The public names are in ``__all__``; like ``import attitude``, each is imported on first
+use (PEP 562), so that ``import attitude.formats`` loads neither the propagators that
+:mod:`.streaming` runs (nor numba) nor spiceypy.
 """
+
+from __future__ import annotations
+
+import importlib
+
+#: Public name -> the module of this wing that owns it.
+_OWNERS = {
+    **dict.fromkeys(("read_aem", "write_aem", "CCSDS_AEM_VERS", "AEM_ATTITUDE_TYPES",
+                     "AEM_WRITE_TYPES", "AEM_TIME_SYSTEMS", "AEM_QUATERNION_NORM_TOL"), "aem"),
+    "convert": "conversion",
+    **dict.fromkeys(("write_ck", "convert_to_ck", "CKFiles", "leapseconds_kernel_text",
+                     "SPICE_FRAMES", "TICKS_PER_SECOND"), "spice"),
+    **dict.fromkeys(("EphemerisWriter", "UniformTimes", "propagate_to_netcdf"), "streaming"),
+}
+
+__all__ = ["read_aem", "write_aem", "convert", "CCSDS_AEM_VERS", "AEM_ATTITUDE_TYPES",
+           "AEM_WRITE_TYPES", "AEM_TIME_SYSTEMS", "AEM_QUATERNION_NORM_TOL", "write_ck",
+           "convert_to_ck", "CKFiles", "leapseconds_kernel_text", "SPICE_FRAMES",
+           "TICKS_PER_SECOND", "EphemerisWriter", "UniformTimes", "propagate_to_netcdf"]
+
+
+def __getattr__(name):
+    owner = _OWNERS.get(name)
+    if owner is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{owner}"), name)
+    globals()[name] = value       # later reads skip this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
