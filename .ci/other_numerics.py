@@ -33,14 +33,15 @@ from pathlib import Path
 #: integrator, ensembles (local and dask), torques, diagnostics, vectorised comparisons.
 #: Left out: the CLI, scenario, format and documentation tests (slow, and not numerics).
 NUMERIC_TESTS = [
-    "tests/test_propagate.py", "tests/test_torquefree.py",
-    "tests/test_torquefree_diagnose.py", "tests/test_splitting.py",
-    "tests/test_ensemble.py", "tests/test_ensemble_dask.py", "tests/test_torques.py",
-    "tests/test_diagnostics.py", "tests/test_body.py", "tests/test_orbit.py",
-    "tests/test_state.py", "tests/test_streaming.py", "tests/test_ephemeris.py",
-    "tests/test_events.py", "tests/tolerances.py", "tests/test_compiled.py",
-    "tests/test_compiled_torques.py", "tests/test_compiled_loop.py",
-    "tests/test_compiled_dop853.py",
+    "tests/propagation/test_propagator.py", "tests/propagation/test_torquefree.py",
+    "tests/model/test_freebody.py", "tests/propagation/test_splitting.py",
+    "tests/model/test_population.py", "tests/propagation/test_batch_dask.py",
+    "tests/model/test_torques.py", "tests/analysis/test_diagnostics.py",
+    "tests/model/test_body.py", "tests/model/test_orbit.py", "tests/model/test_state.py",
+    "tests/formats/test_streaming.py", "tests/model/test_ephemeris.py",
+    "tests/propagation/test_events.py", "tests/tolerances.py",
+    "tests/propagation/test_compiled.py", "tests/propagation/test_compiled_torques.py",
+    "tests/propagation/test_compiled_loop.py", "tests/propagation/test_compiled_dop853.py",
 ]
 
 

@@ -1,7 +1,7 @@
 """Fitting, closed loop: coverage of the 2-sigma intervals and convergence as the noise
 vanishes (issue 16, "Numbers it must show").
 
-Every case is the loop of tests/test_fitting.py, drawn with the same generators
+Every case is the loop of tests/fitting/test_leastsq.py, drawn with the same generators
 (:mod:`attitude.fitting.synthetic`): a hidden torque-free state of the body A:B:C =
 0.6:0.9:1.0 (:func:`~attitude.fitting.synthetic.random_state`: uniformly random
 attitude, rates 0.3 N(0, 1) rad/s with the C (SAM) or A (LAM) component x 4, kept if

@@ -4,7 +4,8 @@ The attitude error at the last output against DOP853 at ``rtol = 1e-13``, for ha
 steps, and the least-squares slope of log(error) against log(step):
 
 * a triaxial body (1, 1.7, 2.2) tumbling at |omega| = 3.7e-3 rad/s in gravity gradient on a
-  7000 km, e = 0.1 orbit, 6000 s (the set-up of ``tests/test_splitting.py``), alone and with
+  7000 km, e = 0.1 orbit, 6000 s (the set-up of ``tests/propagation/test_splitting.py``),
+  alone and with
   internal dissipation (tau = 2000 s and 100 s);
 * internal dissipation alone: the same body relaxing from a long-axis spin
   (omega = (1, 0.05, 0.05) rad/s, tau = 10 s, 30 s), where the internal kick

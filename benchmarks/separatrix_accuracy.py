@@ -131,7 +131,7 @@ def main():
 def shape_sweep():
     """Worst errors over 50 polhode periods for bodies from needle-like to nearly
     spherical, B at 5 %, 50 %, 95 % of the way from A to C, m1 in {1e-3, 0.3, 0.99}
-    on both sides (the grid of tests/test_torquefree.py)."""
+    on both sides (the grid of tests/propagation/test_torquefree.py)."""
     print("| A/C | worst attitude error (rad) | worst rate error (rel.) | "
           "longest span (rad of rotation) |")
     print("|---:|---:|---:|---:|")
