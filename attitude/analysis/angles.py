@@ -330,7 +330,20 @@ def _transport(x_ref: np.ndarray, z_ref: np.ndarray, z: np.ndarray) -> np.ndarra
 
 
 def momentum_frame_x(Lhat: np.ndarray) -> np.ndarray:
-    """X axis of the angular-momentum frame for unit ``L`` directions (T, 3) (D 1)."""
+    """X axis of the angular-momentum frame for unit ``L`` directions (T, 3) (D 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.analysis.angles import momentum_frame_x
+    >>> L = np.array([[0.0, 0.0, 1.0], [0.0, 0.1, 1.0], [0.1, 0.1, 1.0]])
+    >>> L /= np.linalg.norm(L, axis=1, keepdims=True)
+    >>> X = momentum_frame_x(L)               # unit vectors normal to L
+    >>> bool(np.allclose(np.einsum("ij,ij->i", X, L), 0.0, atol=1e-15))
+    True
+    >>> bool(np.allclose(np.linalg.norm(X, axis=1), 1.0))
+    True
+    """
     T = Lhat.shape[0]
     X = np.empty_like(Lhat)
     start = 0

@@ -27,7 +27,9 @@ from .aem_message import (
     error_at,
 )
 
-__all__ = ["rotation_and_rates", "state_values", "estimate_omega"]
+#: Nothing public: these functions serve aem_read and aem_write; the public names are
+#: those of :mod:`attitude.formats.aem`.
+__all__ = []
 
 _AXIS = {"X": np.array([1.0, 0.0, 0.0]), "Y": np.array([0.0, 1.0, 0.0]),
          "Z": np.array([0.0, 0.0, 1.0])}

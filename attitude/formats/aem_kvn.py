@@ -28,7 +28,9 @@ from .aem_message import (
     parse_version,
 )
 
-__all__ = ["parse_kvn", "write_kvn"]
+#: Nothing public: these functions serve aem_read and aem_write; the public names are
+#: those of :mod:`attitude.formats.aem`.
+__all__ = []
 
 _KVN_RE = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)\s*=\s*(.*?)\s*$")
 

@@ -26,6 +26,10 @@ from astropy.time import Time, TimeDelta
 from ..foundations.errors import AttitudeWarning, EphemerisFormatError
 from ..model.state import INERTIAL_FRAMES, format_epoch
 
+#: The constants of the standard; the helpers below (blocks, specs, segments, number and
+#: time parsing, the output writer) are the wing's internal pieces, shared by the
+#: encodings and the entry points, and not public: the public names are those of
+#: :mod:`attitude.formats.aem`.
 __all__ = [
     "CCSDS_AEM_VERS",
     "AEM_QUATERNION_NORM_TOL",
@@ -41,22 +45,6 @@ __all__ = [
     "XML_TAGS",
     "UNITS",
     "INERTIAL_LABELS",
-    "error_at",
-    "warn_at",
-    "Block",
-    "Spec",
-    "Segment",
-    "Message",
-    "norm_text",
-    "parse_version",
-    "euler_sequence",
-    "keyword_block",
-    "header_block",
-    "metadata_block",
-    "parse_number",
-    "Epochs",
-    "parse_times",
-    "Output",
 ]
 
 #: Version written by :func:`write_aem` (CCSDS 504.0-B-2).

@@ -34,7 +34,9 @@ from .aem_message import (
     parse_version,
 )
 
-__all__ = ["parse_xml", "write_xml"]
+#: Nothing public: these functions serve aem_read and aem_write; the public names are
+#: those of :mod:`attitude.formats.aem`.
+__all__ = []
 
 # --- XML ----------------------------------------------------------------------------
 class _Node:
