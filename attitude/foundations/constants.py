@@ -28,6 +28,7 @@ __all__ = [
     "EARTH_DIPOLE_TILT",
     "EARTH_DIPOLE_POLE_LONGITUDE",
     "SUN_RADIUS",
+    "OBLIQUITY_J2000",
     "SOLAR_IRRADIANCE_1AU",
     "SOLAR_PRESSURE_1AU",
 ]
@@ -70,6 +71,9 @@ EARTH_DIPOLE_POLE_LONGITUDE = np.radians(-72.7)
 
 #: Nominal solar radius, m (IAU 2015 Resolution B3).
 SUN_RADIUS = 6.957e8
+#: Obliquity of the ecliptic at J2000, rad (IAU 1976: 84381.448 arcsec): the rotation
+#: ICRF -> ECLIPJ2000.
+OBLIQUITY_J2000 = np.deg2rad(84381.448 / 3600.0)
 #: Total solar irradiance at 1 au, W/m^2: the "solar constant" 1367 W/m^2 of Montenbruck
 #: & Gill 2000, Sec. 3.4.1 (Wertz 1978 and Basilisk use 1368 W/m^2; the IAU 2015
 #: Resolution B3 nominal value is 1361 W/m^2).
