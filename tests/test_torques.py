@@ -776,7 +776,11 @@ def test_from_config_other_types():
     assert isinstance(e, EddyCurrentDamping) and isinstance(e.field, TiltedDipoleField)
     assert e.field.tilt == pytest.approx(np.radians(11.0))
     assert e.field.orbit.mu == MU
-    assert e.field.rotation_angle == pytest.approx(4.894961, abs=1e-5)  # ERA at J2000.0
+    # ERA (IAU 2000; IERS Conventions 2010, eq. 5.15) at UT1 = UTC + 0.355 s (astropy's
+    # IERS table for 2000-01-01T12:00 UTC), no longer with UT1 taken as UTC
+    d_u = 0.355 / 86400.0
+    era = 2.0 * np.pi * (0.7790572732640 + 1.00273781191135448 * d_u)
+    assert e.field.rotation_angle == pytest.approx(era, abs=1e-7)
     e = from_config({"type": "eddy_current", "magnetic_tensor": {
         "value": np.diag([1, 2, 3]).tolist(), "unit": "S m4"},
         "field": {"model": "uniform", "vector": {"value": [0, 0, 30000], "unit": "nT"}}})

@@ -77,7 +77,8 @@ class TiltedDipoleField:
         Colatitude and east longitude of the northern geomagnetic pole; defaults 9.4 deg
         and -72.7 deg (IGRF-13, 2020).
     rotation_angle : float (rad), Quantity or str
-        Earth rotation angle (Greenwich sidereal angle) at ``t = 0``.
+        Earth rotation angle (Greenwich sidereal angle) at ``t = 0``
+        (:func:`attitude.foundations.earth_rotation.earth_rotation_angle` of the epoch).
     rotation_rate : float (rad/s)
         Default :data:`EARTH_ROTATION_RATE`.
 

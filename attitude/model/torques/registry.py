@@ -6,15 +6,14 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-import erfa
 from astropy import units as u
 
 from ...foundations.constants import EARTH_MU
+from ...foundations.earth_rotation import earth_rotation_angle
 from ...foundations.errors import OrbitError, TorqueConfigError
 from ...foundations.spec import Key, Table, json_schema, validate
 from ..body import RigidBody
@@ -154,16 +153,6 @@ def _orbit_from_table(table, mu: float, key: str, base_epoch) -> KeplerOrbit:
     return orbit
 
 
-def _earth_rotation_angle(epoch) -> float:
-    """Earth rotation angle (IAU 2000) at ``epoch``, with UT1 ~ UTC (|UT1 - UTC| < 0.9 s,
-    4e-4 deg; beyond the leap-second table the last TAI - UTC is used, without the
-    "dubious year" warning)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", erfa.ErfaWarning)
-        utc = epoch.utc
-    return float(erfa.era00(utc.jd1, utc.jd2))
-
-
 def _gravity_gradient(table, base_epoch):
     mu = table["mu"]
     return GravityGradient(mu, _orbit_from_table(table["orbit"], mu, "orbit", base_epoch))
@@ -224,7 +213,7 @@ def _field_from_table(table, base_epoch):
             raise TorqueConfigError(err.reason, key=f"field.{err.key}") from None
     kwargs = {k: field_table[k] for k in _FIELD_KEYS["dipole"][1:] if k in field_table}
     if "rotation_angle" not in kwargs and base_epoch is not None:
-        kwargs["rotation_angle"] = _earth_rotation_angle(base_epoch)
+        kwargs["rotation_angle"] = earth_rotation_angle(base_epoch)
     return _prefixed("field", TiltedDipoleField, orbit, **kwargs)
 
 
