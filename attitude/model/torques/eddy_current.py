@@ -6,10 +6,9 @@ import numpy as np
 
 from ...foundations import quaternion as quat
 from ...foundations.errors import TorqueConfigError
-from ..orbit import KeplerOrbit
 from .base import TorqueModel
-from .common import advance, dot, moments_of, orbit_rate, si_positive, si_value
-from .fields import TiltedDipoleField, UniformField
+from .common import dot, moments_of, orbit_rate, si_positive, si_value
+from .fields import UniformField, shifted_field
 
 __all__ = ["EddyCurrentDamping"]
 
@@ -135,15 +134,12 @@ class EddyCurrentDamping(TorqueModel):
         model with the orbit and the Earth rotation angle advanced by ``dt``; else the
         default wrapper."""
         dt = float(dt)
-        if dt == 0.0 or isinstance(self.field, UniformField):
+        if dt == 0.0:
             return self
-        f = self.field
-        if isinstance(f, TiltedDipoleField) and isinstance(f.orbit, KeplerOrbit):
-            field = TiltedDipoleField(advance(f.orbit, dt), moment=f.moment, tilt=f.tilt,
-                                      pole_longitude=f.pole_longitude,
-                                      rotation_angle=f.rotation_angle
-                                      + f.rotation_rate * dt,
-                                      rotation_rate=f.rotation_rate)
+        field = shifted_field(self.field, dt)
+        if field is self.field:
+            return self
+        if field is not None:
             return EddyCurrentDamping(self.magnetic_tensor, field)
         return super().shifted(dt)
 
