@@ -20,7 +20,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
-from attitude import lyapunov as lyapunov_module
+from attitude.analysis import lyapunov as lyapunov_module
 from attitude.analysis.lyapunov import lyapunov_exponent
 from attitude.model.orbit import KeplerOrbit, TabulatedPath
 from attitude.model.torques import (
