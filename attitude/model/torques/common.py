@@ -23,12 +23,15 @@ __all__ = ["dot", "unit_quaternion", "inertia_of", "moments_of", "mass_of", "mat
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot product over the last axis, ``(...)`` (a scalar for two ``(3,)`` vectors)."""
     if a.ndim == 1 and b.ndim == 1:
         return np.dot(a, b)
     return np.sum(a * b, axis=-1)
 
 
 def unit_quaternion(quaternion) -> np.ndarray:
+    """A scalar-last quaternion ``(..., 4)`` (or a scipy ``Rotation``) normalised: the
+    integrators pass their raw stage values, not exactly unit."""
     if isinstance(quaternion, Rotation):
         return quaternion.as_quat()
     q = np.asarray(quaternion, dtype=float)
@@ -65,6 +68,7 @@ def moments_of(body) -> np.ndarray:
 
 
 def mass_of(body) -> np.ndarray | float | None:
+    """Mass of a body (kg), ``(n,)`` of a sequence of them, or None where one has none."""
     if isinstance(body, RigidBody) or hasattr(body, "mass"):
         return body.mass
     if isinstance(body, Sequence) and not isinstance(body, np.ndarray):
@@ -74,6 +78,7 @@ def mass_of(body) -> np.ndarray | float | None:
 
 
 def matvec(inertia: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``I v`` over the leading axes, ``(..., 3)``."""
     if inertia.ndim == 2:
         return v @ inertia.T
     return np.einsum("...ij,...j->...i", inertia, v)
@@ -109,7 +114,7 @@ def advance(orbit: KeplerOrbit, dt: float) -> KeplerOrbit:
     return dataclasses.replace(orbit, mean_anomaly=M)
 
 
-# --- conversions of constructor arguments -------------------------------------------------
+# --- conversions of constructor arguments ----------------------------------------------
 
 
 def si_value(value, unit: str, key: str, *, shape: tuple | None = ()):
@@ -119,10 +124,13 @@ def si_value(value, unit: str, key: str, *, shape: tuple | None = ()):
 
 
 def si_positive(value, unit: str, key: str) -> float:
+    """:func:`si_value` of a scalar that must be positive."""
     return to_si(value, unit, key=key, shape=(), positive=True, error=TorqueConfigError)
 
 
 def check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
+    """Raise :class:`TorqueConfigError` at ``where.key`` for a key of ``table`` not in
+    ``allowed``, with a did-you-mean suggestion."""
     for key in table:
         if key not in allowed:
             path = f"{where}.{key}" if where else str(key)
