@@ -40,11 +40,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..foundations.constants import EARTH_MU
 from ..foundations.errors import AttitudeError, TorqueConfigError
 from ..foundations.spec import Key, Table
 from ..model.shape import Polyhedron
 from ..model.surface import OpticalProperties, Surface
-from ..model.torques import EARTH_MU, ORBIT_TABLE, BuildContext, register_torque_type
+from ..model.torques import ORBIT_TABLE, BuildContext, register_torque_type
 from .drag import AerodynamicDrag, ExponentialAtmosphere
 from .facets import Facets
 from .frames import check_frame

@@ -39,11 +39,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..foundations import quaternion as quat
+from ..foundations.constants import EARTH_ROTATION_RATE
 from ..foundations.errors import TorqueConfigError
 from ..foundations.quantities import to_si
 from ..foundations.quaternion import cross
 from ..model.orbit import as_path
-from ..model.torques import EARTH_ROTATION_RATE
 from .facets import Facets, as_facets
 from .sun import EARTH_RADIUS
 from .torquebase import EnvironmentTorque, check_vector

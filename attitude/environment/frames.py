@@ -22,6 +22,7 @@ from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 from scipy.interpolate import CubicSpline
 
+from ..foundations.earth_rotation import earth_rotation_angle
 from ..foundations.errors import OrbitError
 
 __all__ = ["EARTH_FRAMES", "teme_to_inertial", "inertial_to_earth_fixed", "gcrf_to_frame"]
@@ -70,10 +71,7 @@ NODE_SPACING = 3600.0
 
 def _era_matrices(times: Time) -> np.ndarray:
     """``R3(ERA)``, the Earth's rotation about the celestial intermediate pole."""
-    with iers.conf.set_temp("auto_download", False), \
-            iers.conf.set_temp("iers_degraded_accuracy", "warn"):
-        ut1 = times.ut1
-    era = erfa.era00(ut1.jd1, ut1.jd2)
+    era = earth_rotation_angle(times)
     return erfa.rz(era, np.broadcast_to(np.eye(3), (times.size, 3, 3)))
 
 

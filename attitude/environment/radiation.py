@@ -11,8 +11,9 @@ fraction ``1 - rho_s - rho_d`` of the light, reflects ``rho_s`` specularly and
         + 2 \\left(\\rho_s \\cos\\theta + \\frac{\\rho_d}{3}\\right) n\\right]
 
 (Montenbruck & Gill 2000, Sec. 3.4, eq. 3.73; Wertz 1978, Sec. 17.2), with ``P`` the
-radiation pressure, ``4.56e-6 N/m^2`` at 1 au, scaled by ``(1 au / d)^2`` with ``d`` the
-distance to the Sun.  Facets facing away (``cos(theta) <= 0``) feel nothing.  By
+radiation pressure, ``1367 W/m^2 / c = 4.5598e-6 N/m^2`` at 1 au
+(:data:`~attitude.foundations.constants.SOLAR_PRESSURE_1AU`), scaled by ``(1 au / d)^2``
+with ``d`` the distance to the Sun.  Facets facing away (``cos(theta) <= 0``) feel nothing.  By
 default the light one facet blocks from another is not followed (exact for a convex
 body); with ``self_shadowing=True`` a facet feels only its part that sees the Sun past
 the rest of the body (see below).  The
@@ -68,6 +69,8 @@ import math
 import numpy as np
 
 from ..foundations import quaternion as quat
+from ..foundations.constants import AU as ASTRONOMICAL_UNIT
+from ..foundations.constants import SOLAR_PRESSURE_1AU
 from ..foundations.errors import TorqueConfigError
 from ..foundations.quantities import to_si
 from ..foundations.quaternion import cross
@@ -79,12 +82,6 @@ from .torquebase import EnvironmentTorque, check_vector
 
 __all__ = ["SolarRadiationPressure", "SOLAR_PRESSURE_1AU", "ASTRONOMICAL_UNIT",
            "AUTO_SPACING", "AUTO_MAX_SUBDIVISION"]
-
-#: Solar radiation pressure at 1 au on an absorbing surface, N/m^2 (1367 W/m^2 / c;
-#: Montenbruck & Gill 2000, Sec. 3.4.1).
-SOLAR_PRESSURE_1AU = 4.56e-6
-#: The astronomical unit (IAU 2012), m.
-ASTRONOMICAL_UNIT = 1.495978707e11
 
 
 class SolarRadiationPressure(EnvironmentTorque):
@@ -136,7 +133,7 @@ class SolarRadiationPressure(EnvironmentTorque):
     >>> srp = SolarRadiationPressure(plate, sun=[1.495978707e11, 0, 0], orbit=[0, 0, 0],
     ...                              shadow=None)
     >>> srp(0.0, [0, 0, 0, 1], [0, 0, 0], np.eye(3))
-    array([0.00e+00, 0.00e+00, 4.56e-06])
+    array([0.0000e+00, 0.0000e+00, 4.5598e-06])
     """
 
     velocity_dependent = False
@@ -295,7 +292,8 @@ class SolarRadiationPressure(EnvironmentTorque):
         >>> plate = Facets.plate(1.0, [0.0, 0.0, 1.0], specular=1.0)   # a mirror
         >>> srp = SolarRadiationPressure(plate, sun=[0, 0, 1.495978707e11],
         ...                              orbit=[0, 0, 0], shadow=None)
-        >>> srp.force(0.0, [0, 0, 0, 1])[2] / 4.56e-6               # twice the push
+        >>> from attitude.foundations.constants import SOLAR_PRESSURE_1AU
+        >>> srp.force(0.0, [0, 0, 0, 1])[2] / SOLAR_PRESSURE_1AU    # twice the push
         np.float64(-2.0)
         """
         q = np.asarray(quaternion, dtype=float)

@@ -24,16 +24,13 @@ from astropy.coordinates import get_body
 from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 
+from ..foundations.constants import EARTH_RADIUS, SUN_RADIUS
 from ..foundations.errors import OrbitError
 from .frames import check_frame, gcrf_to_frame
 from .tabulation import TimeTable
 
 __all__ = ["SunPath", "illumination", "EARTH_RADIUS", "SUN_RADIUS", "SHADOW_MODELS"]
 
-#: Equatorial radius of the Earth (WGS 84), m.
-EARTH_RADIUS = 6378137.0
-#: Nominal solar radius (IAU 2015 Resolution B3), m.
-SUN_RADIUS = 6.957e8
 #: Shadow models of :func:`illumination`.
 SHADOW_MODELS = ("conical", "cylindrical")
 

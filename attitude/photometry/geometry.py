@@ -21,15 +21,12 @@ import astropy.units as u
 import numpy as np
 from astropy.time import Time, TimeDelta
 
+from attitude.foundations.constants import AU, OBLIQUITY_J2000, SPEED_OF_LIGHT
 from attitude.foundations.errors import PhotometryError
 from attitude.model.orbit import as_path
 
 __all__ = ["Geometry", "reduced_magnitude", "phase_angle", "AU", "SPEED_OF_LIGHT"]
 
-AU = 149_597_870_700.0            #: m, IAU 2012 resolution B2
-SPEED_OF_LIGHT = 299_792_458.0    #: m/s
-#: J2000 obliquity of the ecliptic (IAU 1976, 84381.448 arcsec): ICRF -> ECLIPJ2000.
-OBLIQUITY_J2000 = np.deg2rad(84381.448 / 3600.0)
 _EQUATORIAL = {"ICRF", "GCRF", "EME2000", "J2000"}
 _ECLIPTIC = {"ECLIPJ2000", "ECLIPTIC_J2000"}
 # A phase angle within this of 180 deg means the observer looks at the unlit side only.

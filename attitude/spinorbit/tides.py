@@ -27,13 +27,12 @@ from __future__ import annotations
 
 import math
 
+from ..foundations.constants import G
 from ..foundations.errors import SpinOrbitError
 from ..foundations.quantities import to_si
 
 __all__ = ["G", "love_number_k2", "despinning_time"]
 
-#: Newtonian constant of gravitation, m^3 kg^-1 s^-2 (CODATA 2018).
-G = 6.67430e-11
 
 
 def _positive(value, unit: str, key: str) -> float:

@@ -29,7 +29,7 @@ needs_embree = pytest.mark.skipif(importlib.util.find_spec("embreex") is None,
                                   reason="embreex (the shadows extra) is not installed")
 
 AU = 1.495978707e11
-P = 4.56e-6                                   # the pressure at 1 au, N/m^2
+P = 1367.0 / 299_792_458.0                    # the pressure at 1 au, N/m^2: irradiance / c
 SUN_X = dict(sun=[AU, 0.0, 0.0], orbit=[0.0, 0.0, 0.0], shadow=None)
 BODY = att.RigidBody.from_principal_moments([400.0, 500.0, 600.0])
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])

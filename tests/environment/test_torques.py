@@ -25,7 +25,7 @@ from attitude.model.surface import OpticalProperties, Surface
 pytest.importorskip("sgp4")
 
 AU = 1.495978707e11
-P0 = 4.56e-6
+P0 = 1367.0 / 299_792_458.0    # solar irradiance at 1 au (W/m^2) / c: the default, N/m^2
 EPS = np.finfo(float).eps
 ISS = ("1 25544U 98067A   24061.50000000  .00016717  00000-0  10270-3 0  9005",
        "2 25544  51.6416 247.4627 0006703 130.5360 325.0288 15.72125391563537")

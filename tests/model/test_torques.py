@@ -776,7 +776,11 @@ def test_from_config_other_types():
     assert isinstance(e, EddyCurrentDamping) and isinstance(e.field, TiltedDipoleField)
     assert e.field.tilt == pytest.approx(np.radians(11.0))
     assert e.field.orbit.mu == MU
-    assert e.field.rotation_angle == pytest.approx(4.894961, abs=1e-5)  # ERA at J2000.0
+    # ERA (IAU 2000; IERS Conventions 2010, eq. 5.15) at UT1 = UTC + 0.355 s (astropy's
+    # IERS table for 2000-01-01T12:00 UTC), no longer with UT1 taken as UTC
+    d_u = 0.355 / 86400.0
+    era = 2.0 * np.pi * (0.7790572732640 + 1.00273781191135448 * d_u)
+    assert e.field.rotation_angle == pytest.approx(era, abs=1e-7)
     e = from_config({"type": "eddy_current", "magnetic_tensor": {
         "value": np.diag([1, 2, 3]).tolist(), "unit": "S m4"},
         "field": {"model": "uniform", "vector": {"value": [0, 0, 30000], "unit": "nT"}}})
@@ -922,3 +926,35 @@ def test_gravity_gradient_roll_yaw_libration_matches_linear_theory():
         assert misfit(x, w) < 1e-3
         assert misfit(x, 1.05 * w) > 0.3
     assert np.max(np.abs(pitch)) < 1e-2 * np.max(np.abs(roll))   # pitch decoupled
+
+
+#: Names the single module attitude.model.torques offered before it became a package (its
+#: public names, and those other modules imported from it): each stays importable from
+#: the package and from the public namespace attitude.torques.
+SINGLE_MODULE_NAMES = [
+    "BuildContext", "ConstantTorque", "EARTH_DIPOLE_MOMENT", "EARTH_DIPOLE_POLE_LONGITUDE",
+    "EARTH_DIPOLE_TILT", "EARTH_MU", "EARTH_ROTATION_RATE", "EddyCurrentDamping",
+    "EnergyDissipation", "FIELD_SOURCES", "FunctionTorque", "GravityGradient",
+    "HeavyTopPivot", "KeplerOrbit", "Key", "MagneticDipole", "ORBIT_SOURCES", "ORBIT_TABLE",
+    "OrbitError", "RigidBody", "STANDARD_GRAVITY", "SYMMETRY_RTOL", "SYNONYMS", "SumTorque",
+    "TORQUE_TABLES", "TORQUE_TYPES", "Table", "TiltedDipoleField", "TorqueConfigError",
+    "TorqueModel", "UniformField", "as_path", "as_torque_model", "damping_timescale",
+    "from_config", "internal_rate", "json_schema", "register_torque_type", "to_si",
+    "validate",
+]
+
+
+@pytest.mark.parametrize("namespace", ["attitude.model.torques", "attitude.torques"])
+def test_the_torques_package_keeps_the_single_modules_names(namespace):
+    import importlib
+
+    from attitude.foundations import constants
+    from attitude.model.torques import registry
+
+    module = importlib.import_module(namespace)
+    assert not [name for name in SINGLE_MODULE_NAMES if not hasattr(module, name)]
+    assert module.EARTH_MU is constants.EARTH_MU
+    # the registries are the package's own dicts: a wing registering a type is seen by
+    # from_config
+    assert module.TORQUE_TABLES is registry.TORQUE_TABLES
+    assert module.ORBIT_SOURCES is registry.ORBIT_SOURCES
