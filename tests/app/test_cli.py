@@ -60,6 +60,7 @@ def test_help_teaches_with_an_example():
     assert proc.returncode == 0 and "attitude run scenarios/" in proc.stdout
 
 
+@pytest.mark.slow      # every shipped scenario in a subprocess (CI also runs attitude check)
 def test_shipped_scenarios_run(tmp_path):
     for path in sorted((ROOT / "scenarios").glob("*.toml")):
         proc = attitude("run", path, "-o", tmp_path / (path.stem + ".nc"), "--quiet")

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow      # a benchmark script's smoke run (CI runs the slow tier)
+
 pytest.importorskip("distributed")
 pytest.importorskip("psutil")
 

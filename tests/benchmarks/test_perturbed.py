@@ -14,6 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from ..tolerances import EPS, SPLITTING_STEP
 
 SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "perturbed.py"
@@ -31,6 +33,7 @@ def table_rows(text):
     return rows
 
 
+@pytest.mark.slow      # a benchmark script's smoke run (CI runs the slow tier)
 def test_perturbed_benchmark_quick_without_basilisk(tmp_path):
     out_json = tmp_path / "perturbed.json"
     env = {k: v for k, v in os.environ.items() if k != "BSK_PYTHON"}

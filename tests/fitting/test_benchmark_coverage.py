@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from scipy.stats import binomtest
 
 SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "fitting_coverage.py"
@@ -24,6 +25,7 @@ def _table(text: str, header: str) -> list[list[str]]:
     return rows
 
 
+@pytest.mark.slow      # a benchmark script's smoke run (CI runs the slow tier)
 def test_fitting_coverage_quick_runs_and_its_tables_parse(tmp_path):
     out_json = tmp_path / "coverage.json"
     out = subprocess.run([sys.executable, str(SCRIPT), "--quick", "--json", str(out_json)],
