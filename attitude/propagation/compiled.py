@@ -41,16 +41,19 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
+import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
-__all__ = ["NUMBA", "jit", "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
+__all__ = ["NUMBA", "jit", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
+           "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
 
 #: Unit roundoff of float64 (half the spacing of 1.0): the AGM's stopping test (Cephes'
 #: MACHEP) and Carlson's ``r``.
@@ -106,9 +109,83 @@ def _drop_stale_cache() -> None:
         return
 
 
+#: The message :func:`jit`'s kernels print on stderr, once per process, when numba compiles
+#: them (not when it loads them from its cache).
+COMPILE_NOTICE = "attitude: compiling the propagation kernels (first run only, ~10 s)..."
+#: Whether to print :data:`COMPILE_NOTICE` (:func:`set_compile_notice`; off with the
+#: environment variable ``ATTITUDE_QUIET=1``); ``_notice[1]``: printed already.
+_notice = [os.environ.get("ATTITUDE_QUIET", "") in ("", "0"), False]
+#: The dispatchers :func:`jit` made (a compile of any other numba function says nothing).
+_KERNELS: set = set()
+
+
+def set_compile_notice(enabled: bool) -> bool:
+    """Say (``True``, the default) or not on stderr when numba compiles the kernels, which
+    takes ~10 s the first time they run (afterwards numba loads them from its cache and
+    nothing is said).  The ``--quiet`` of ``attitude`` and ``ATTITUDE_QUIET=1`` turn it off.
+
+    Returns the previous setting.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import set_compile_notice
+    >>> previous = set_compile_notice(False)
+    >>> set_compile_notice(previous)
+    False
+    """
+    previous, _notice[0] = _notice[0], bool(enabled)
+    return previous
+
+
+@contextlib.contextmanager
+def quiet_compiles(quiet: bool = True):
+    """A context in which, if ``quiet``, compiling the kernels says nothing (the
+    ``--quiet`` of ``attitude``); the setting of :func:`set_compile_notice` comes back
+    after it.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import quiet_compiles
+    >>> with quiet_compiles():
+    ...     pass
+    """
+    previous = set_compile_notice(_notice[0] and not quiet)
+    try:
+        yield
+    finally:
+        set_compile_notice(previous)
+
+
+def _say_compiling(dispatcher) -> None:
+    """Print :data:`COMPILE_NOTICE` once, when one of :func:`jit`'s kernels compiles."""
+    if _notice[0] and not _notice[1] and dispatcher in _KERNELS:
+        _notice[1] = True
+        print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+
+def _listen_to_compiles(numba) -> None:
+    """Call :func:`_say_compiling` when numba compiles a function: its ``numba:compile``
+    event comes on a compile only, not on a load from the cache (numba's event API; a
+    numba without it compiles in silence)."""
+    try:
+        event = numba.core.event
+
+        class CompileNotice(event.Listener):
+            def on_start(self, ev):
+                _say_compiling(ev.data["dispatcher"])
+
+            def on_end(self, ev):
+                pass
+
+        event.register("numba:compile", CompileNotice())
+    except (AttributeError, TypeError):   # pragma: no cover - numba's API changed
+        return
+
+
 _NB = _numba()
 if _NB is not None:
     _drop_stale_cache()
+    _listen_to_compiles(_NB)
 #: True when the kernels below are compiled by numba (importable and not disabled by the
 #: environment variable ``ATTITUDE_NO_NUMBA=1``); False: they run as plain Python.
 NUMBA = _NB is not None
@@ -120,7 +197,8 @@ def jit(function):
 
     The compiled function keeps the Python one as ``.py_func``.  Compiled code is cached
     beside the source (numba's ``__pycache__``), or not cached when there is no source
-    file.
+    file.  When numba compiles one (not when it loads it from the cache), the first time
+    in the process, :data:`COMPILE_NOTICE` goes to stderr (:func:`set_compile_notice`).
 
     Examples
     --------
@@ -134,9 +212,11 @@ def jit(function):
     if _NB is None:
         return function
     try:
-        return _NB.njit(cache=True, nogil=True, error_model="numpy")(function)
+        kernel = _NB.njit(cache=True, nogil=True, error_model="numpy")(function)
     except RuntimeError:          # no file to cache it beside (typed at a prompt, doctest)
-        return _NB.njit(nogil=True, error_model="numpy")(function)
+        kernel = _NB.njit(nogil=True, error_model="numpy")(function)
+    _KERNELS.add(kernel)
+    return kernel
 
 
 def each_on_cores(run, n: int):

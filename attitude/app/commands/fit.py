@@ -9,6 +9,7 @@ from ...fitting import fit, sample_posterior
 from ...fitting.config import fitted_scenario
 from ...fitting.plot import corner_figure, residual_figure
 from ...model.ephemeris import write_atomically
+from ...propagation.compiled import quiet_compiles
 from ..scenario import load_scenario
 from .common import EXIT_EXPECTATION, EXIT_INPUT, EXIT_OK
 
@@ -16,6 +17,12 @@ __all__ = ["command"]
 
 
 def command(args) -> int:
+    """``attitude fit``; its ``--quiet`` also silences the kernels' compile notice."""
+    with quiet_compiles(args.quiet):
+        return _fit(args)
+
+
+def _fit(args) -> int:
     scenario = load_scenario(args.scenario)
     cfg = scenario.observations
     if cfg is None:

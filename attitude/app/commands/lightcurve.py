@@ -10,6 +10,7 @@ from pathlib import Path
 from ...model.ephemeris import write_atomically
 from ...photometry.config import run_lightcurve
 from ...photometry.plot import save_lightcurve_figures
+from ...propagation.compiled import quiet_compiles
 from ..scenario import load_scenario
 from .common import EXIT_EXPECTATION, EXIT_INPUT, EXIT_OK
 
@@ -17,6 +18,12 @@ __all__ = ["command"]
 
 
 def command(args) -> int:
+    """``attitude lightcurve``; its ``--quiet`` also silences the kernels' compile notice."""
+    with quiet_compiles(args.quiet):
+        return _lightcurve(args)
+
+
+def _lightcurve(args) -> int:
     scenario = load_scenario(args.scenario)
     if scenario.photometry is None:
         print(f"attitude: error: {args.scenario}: photometry: the scenario has no "

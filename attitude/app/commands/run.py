@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ...model.ephemeris import write_atomically
 from ...propagation.cluster import local_cluster
+from ...propagation.compiled import quiet_compiles
 from ...propagation.events import event_table
 from ..plot import save_figures
 from ..scenario import load_scenario, run_scenario
@@ -188,6 +189,12 @@ def _plot_stem(args, result) -> Path:
 
 
 def command(args) -> int:
+    """``attitude run``; its ``--quiet`` also silences the kernels' compile notice."""
+    with quiet_compiles(args.quiet):
+        return _run(args)
+
+
+def _run(args) -> int:
     if args.plot:
         try:
             import matplotlib  # noqa: F401  (optional: 'attitude-dynamics[plot]')

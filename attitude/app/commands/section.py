@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from ...model.ephemeris import write_atomically
+from ...propagation.compiled import quiet_compiles
 from ...spinorbit import section as spinorbit_section
 from ..scenario import load_scenario
 from .common import EXIT_INPUT, EXIT_OK
@@ -17,6 +18,12 @@ __all__ = ["command"]
 
 
 def command(args) -> int:
+    """``attitude section``; its ``--quiet`` also silences the kernels' compile notice."""
+    with quiet_compiles(args.quiet):
+        return _section(args)
+
+
+def _section(args) -> int:
     scenario = load_scenario(args.scenario)
     if scenario.section is None:
         print(f"attitude: error: {args.scenario}: section: the scenario has no [section] "
