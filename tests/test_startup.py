@@ -41,3 +41,39 @@ def test_import_attitude_loads_only_the_exceptions():
     loaded, _ = loaded_after("import attitude")
     assert loaded == set()
 
+
+
+def test_a_torque_free_propagation_loads_no_numba_plotting_or_wing():
+    """The core dependencies only (xarray itself imports dask where it is installed);
+    the modules of earlier releases' paths are stand-ins without a file until used."""
+    code = """\
+import numpy as np
+import attitude as att
+from astropy.time import Time
+from scipy.spatial.transform import Rotation
+body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+state = att.AttitudeState(Time("2029-04-13", scale="tdb"), Rotation.identity(),
+                          np.array([0.01, 0.002, 0.03]))
+eph = att.propagate(body, state, np.linspace(0.0, 1000.0, 11))
+att.diagnose(body, state)
+wings = [m for m, module in sys.modules.items() if getattr(module, "__file__", None)
+         and m.split(".")[:2] in (["attitude", w] for w in (
+             "formats", "photometry", "fitting", "environment", "spinorbit", "app"))]
+assert not wings, wings
+"""
+    loaded, _ = loaded_after(code)
+    assert loaded >= {"numpy", "scipy", "astropy", "xarray"}
+    assert not loaded & {"numba", "matplotlib", "rich"}
+
+
+def test_numba_loads_on_the_first_kernel_call():
+    code = """\
+from attitude.propagation import compiled
+assert "numba" not in sys.modules
+if compiled.NUMBA:
+    assert compiled.ellipj(0.3, 0.5)[0] == compiled.ellipj.py_func(0.3, 0.5)[0]
+    assert "numba" in sys.modules
+    from attitude.propagation import compiled_loop
+    assert type(compiled_loop.free_flow_one).__name__ == "CPUDispatcher"
+"""
+    loaded_after(code)
