@@ -22,9 +22,16 @@ import traceback
 
 from ..foundations.errors import AttitudeError, PropagationError
 from ..version import __version__
-from .commands.common import EXIT_INPUT, EXIT_PROPAGATION, one_line
+from .commands.common import (
+    EXIT_EXPECTATION,
+    EXIT_INPUT,
+    EXIT_OK,
+    EXIT_PROPAGATION,
+    one_line,
+)
 
-__all__ = ["main", "build_parser", "COMMANDS"]
+__all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_EXPECTATION", "EXIT_INPUT",
+           "EXIT_PROPAGATION"]
 
 #: Command name -> the module that runs it (its ``command(args) -> int``), imported when
 #: the command runs (never for ``--help``).
