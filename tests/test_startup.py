@@ -77,3 +77,24 @@ if compiled.NUMBA:
     assert type(compiled_loop.free_flow_one).__name__ == "CPUDispatcher"
 """
     loaded_after(code)
+
+
+def test_kernels_called_first_from_several_threads():
+    """The first calls may come at once from the threads of ``each_on_cores``: each waits
+    for the dispatchers and the rebinding of all kernels."""
+    code = """\
+from concurrent.futures import ThreadPoolExecutor
+from attitude.propagation import compiled, compiled_loop
+import numpy as np
+kernels = [compiled.ellipj, compiled.elliprf, compiled.ellipj, compiled.elliprf] * 2
+args = [(0.3, 0.5), (1.0, 2.0, 3.0)] * 4
+with ThreadPoolExecutor(8) as pool:
+    got = list(pool.map(lambda ka: ka[0](*ka[1]), zip(kernels, args)))
+want = [k.py_func(*a) for k, a in zip(kernels, args)]
+assert np.allclose(np.array(got[0::2]), np.array(want[0::2]), rtol=1e-15, atol=0)
+assert np.allclose(got[1::2], want[1::2], rtol=1e-15, atol=0)
+if compiled.NUMBA:
+    assert "numba" in sys.modules and compiled.ellipj.signatures
+    assert type(compiled_loop.free_flow_one).__name__ == "CPUDispatcher"
+"""
+    loaded_after(code)

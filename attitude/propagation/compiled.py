@@ -210,14 +210,14 @@ class _Kernel:
         _PENDING.append(self)
 
     def __call__(self, *args, **kwargs):
-        if self.dispatcher is None:
+        if not _LOADED.is_set():      # (not self.dispatcher: it is set before the rebinding)
             _load_numba()
         return self.dispatcher(*args, **kwargs)
 
     def __getattr__(self, name):        # the dispatcher's (signatures, stats, ...)
         if name.startswith("__") or name in ("py_func", "dispatcher"):
             raise AttributeError(name)
-        if self.dispatcher is None:
+        if not _LOADED.is_set():
             _load_numba()
         return getattr(self.dispatcher, name)
 
