@@ -9,6 +9,7 @@ docs/architecture.md."""
 
 from __future__ import annotations
 
+import argparse
 import ast
 import importlib
 import json
@@ -72,7 +73,25 @@ def _graph():
                     edges.setdefault(alias.name, []).append(
                         (node.lineno, node.lineno in func_lines, alias.name))
         graph[name] = edges
+    for name, (table, _) in IMPORTS_BY_NAME.items():
+        if table is not None:       # the modules it imports by name count as its imports
+            for dest in getattr(importlib.import_module(name), table).values():
+                graph[name].setdefault(dest, []).append((0, False, dest.rsplit(".", 1)[-1]))
     return graph
+
+
+#: Modules allowed to import by name (``importlib.import_module``): the table of the names
+#: they import (its values count as their imports in the cycle test), or None, and why.
+IMPORTS_BY_NAME = {
+    "attitude": (None, "the public names, each imported on first use (PEP 562); the package "
+                       "namespace is outside the cycle test"),
+    "attitude.deprecation": (None, "the module paths of earlier releases, forwarded to "
+                                   "their new homes (deprecation.MOVED_MODULES)"),
+    "attitude.formats": (None, "the wing's public names, each imported on first use (its "
+                               "modules are the wing's own; streaming would load numba)"),
+    "attitude.app.cli": ("COMMANDS", "each command's module is imported when it runs, so "
+                                     "that `attitude --help` loads no numpy (issue 25)"),
+}
 
 
 GRAPH = _graph()
@@ -322,6 +341,31 @@ def test_every_name_of_the_previous_release_still_imports(module):
         assert deprecations, f"{module} moved but does not warn"
     elif not moved:
         assert not deprecations
+
+
+def test_imports_by_name_only_where_declared():
+    """``importlib.import_module`` (or ``__import__``) hides an import from the graph above:
+    only the modules of :data:`IMPORTS_BY_NAME` use it, and there its table says what."""
+    bad = []
+    for module, path in _modules():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call) and (
+                    isinstance(node.func, ast.Attribute) and node.func.attr == "import_module"
+                    or isinstance(node.func, ast.Name) and node.func.id == "__import__") \
+                    and module not in IMPORTS_BY_NAME:
+                bad.append(f"{module}:{node.lineno} imports a module by name")
+    assert not bad, "\n".join(bad)
+
+
+def test_cli_commands_are_modules_with_a_command():
+    from attitude.app.cli import COMMANDS, build_parser
+
+    subparsers = next(a for a in build_parser()._actions
+                      if isinstance(a, argparse._SubParsersAction))
+    assert sorted(COMMANDS) == sorted(subparsers.choices)
+    for name in COMMANDS.values():
+        assert (ROOT.parent / name.replace(".", "/")).with_suffix(".py").is_file()
+        assert callable(importlib.import_module(name).command)
 
 
 #: ``attitude.__all__`` of the release before the reorganisation (every name stays).

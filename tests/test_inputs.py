@@ -444,12 +444,12 @@ def test_nan_rows_of_a_table_are_invalid_bodies_not_errors(tmp_path):
 
 def test_a_bug_is_one_line_and_exit_3_with_the_traceback_on_request(tmp_path, capsys,
                                                                     monkeypatch):
-    import attitude.app.cli as cli
+    import attitude.app.commands.run as run_command
 
     def boom(*args, **kwargs):
         raise ZeroDivisionError("float division by zero")
 
-    monkeypatch.setattr(cli, "run_scenario", boom)
+    monkeypatch.setattr(run_command, "run_scenario", boom)
     path = _write(tmp_path, BASES["euler"])
     assert main(["run", str(path), "--quiet"]) == 3
     err = capsys.readouterr().err.strip()

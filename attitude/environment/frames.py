@@ -17,9 +17,7 @@ from __future__ import annotations
 import erfa
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import GCRS, ITRS, TEME, CartesianRepresentation
 from astropy.time import Time, TimeDelta
-from astropy.utils import iers
 from scipy.interpolate import CubicSpline
 
 from ..foundations.earth_rotation import earth_rotation_angle
@@ -47,8 +45,13 @@ def check_frame(frame: str) -> str:
     return "EME2000" if name == "J2000" else name
 
 
-def _columns(frame_from, frame_to, times: Time) -> np.ndarray:
-    """``(n, 3, 3)``: the images of the three unit vectors of ``frame_from``."""
+def _columns(frame_from: str, frame_to: str, times: Time) -> np.ndarray:
+    """``(n, 3, 3)``: the images of the three unit vectors of the astropy frame named
+    ``frame_from`` (``"TEME"``, ``"GCRS"``) in ``frame_to`` (``"GCRS"``, ``"ITRS"``)."""
+    from astropy import coordinates  # costly (~1 s to import): only when a frame turns
+    from astropy.utils import iers  # costly (its tables load astropy.table, ~0.5 s)
+
+    frame_from, frame_to = getattr(coordinates, frame_from), getattr(coordinates, frame_to)
     n = times.size
     out = np.empty((n, 3, 3))
     with iers.conf.set_temp("auto_download", False), \
@@ -56,7 +59,7 @@ def _columns(frame_from, frame_to, times: Time) -> np.ndarray:
         for j in range(3):
             e = np.zeros((3, n))
             e[j] = 1.0
-            rep = CartesianRepresentation(e * u.km)
+            rep = coordinates.CartesianRepresentation(e * u.km)
             moved = frame_from(rep, obstime=times).transform_to(frame_to(obstime=times))
             out[:, :, j] = moved.cartesian.xyz.to_value(u.km).T
     return out
@@ -104,7 +107,7 @@ def gcrf_to_frame(frame: str, times: Time) -> np.ndarray:
     True
     """
     if frame == "TEME":
-        return np.swapaxes(_interpolated(times, lambda n: _columns(TEME, GCRS, n),
+        return np.swapaxes(_interpolated(times, lambda n: _columns("TEME", "GCRS", n),
                                          spin=False), -1, -2)
     if frame == "EME2000":
         tt = times.tt
@@ -128,7 +131,7 @@ def teme_to_inertial(times: Time, frame: str = "GCRF") -> np.ndarray:
     if frame == "TEME":
         return np.broadcast_to(np.eye(3), (times.size, 3, 3)).copy()
     return gcrf_to_frame(frame, times) @ _interpolated(
-        times, lambda n: _columns(TEME, GCRS, n), spin=False)
+        times, lambda n: _columns("TEME", "GCRS", n), spin=False)
 
 
 def inertial_to_earth_fixed(times: Time, frame: str = "GCRF") -> np.ndarray:
@@ -144,7 +147,7 @@ def inertial_to_earth_fixed(times: Time, frame: str = "GCRF") -> np.ndarray:
     frame = check_frame(frame)
     times = Time(times).reshape(-1)
     if frame == "TEME":
-        return _interpolated(times, lambda n: _columns(TEME, ITRS, n), spin=True)
+        return _interpolated(times, lambda n: _columns("TEME", "ITRS", n), spin=True)
     to_frame = gcrf_to_frame(frame, times)
-    return (_interpolated(times, lambda n: _columns(GCRS, ITRS, n), spin=True)
+    return (_interpolated(times, lambda n: _columns("GCRS", "ITRS", n), spin=True)
             @ np.swapaxes(to_frame, -1, -2))

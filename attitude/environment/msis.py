@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import EarthLocation
 from astropy.time import Time, TimeDelta
 
 from ..foundations.errors import MissingDependencyError, TorqueConfigError
@@ -179,6 +178,7 @@ class MSISAtmosphere:
             raise TorqueConfigError("the density along an orbit needs the epoch of t = 0",
                                     key="epoch")
         path, frame = as_path(orbit), check_frame(frame)
+        from astropy.coordinates import EarthLocation  # costly (~1 s to import): used here
 
         def evaluate(t):
             times = epoch + TimeDelta(t, format="sec")

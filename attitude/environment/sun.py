@@ -20,9 +20,7 @@ import math
 
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import get_body
 from astropy.time import Time, TimeDelta
-from astropy.utils import iers
 
 from ..foundations.constants import EARTH_RADIUS, SUN_RADIUS
 from ..foundations.errors import OrbitError
@@ -62,6 +60,9 @@ class SunPath:
         self._table = TimeTable(self._evaluate, spacing=spacing, segment=48 * spacing)
 
     def _evaluate(self, t: np.ndarray) -> np.ndarray:
+        from astropy.coordinates import get_body  # costly (~1 s to import): used here
+        from astropy.utils import iers  # costly (its tables load astropy.table, ~0.5 s)
+
         times = self.epoch + TimeDelta(t, format="sec")
         with iers.conf.set_temp("auto_download", False):
             xyz = get_body("sun", times).cartesian.xyz.to_value(u.m).T

@@ -17,7 +17,6 @@ import warnings
 
 import erfa
 import numpy as np
-from astropy.utils import iers
 
 __all__ = ["earth_rotation_angle"]
 
@@ -57,6 +56,8 @@ def earth_rotation_angle(times) -> float | np.ndarray:
     >>> earth_rotation_angle(Time(["2024-03-01", "2024-03-02"], scale="utc")).shape
     (2,)
     """
+    from astropy.utils import iers  # costly (its tables load astropy.table, ~0.5 s)
+
     with iers.conf.set_temp("auto_download", False), \
             iers.conf.set_temp("auto_max_age", None), \
             iers.conf.set_temp("iers_degraded_accuracy", "warn"), \

@@ -6,10 +6,11 @@ flow and the special functions it needs as *scalar* functions written so that nu
 compiles them (``nopython``, no allocation), and so that they still run as plain Python
 when numba is absent or disabled:
 
-- :data:`NUMBA` is True when numba imports and ``ATTITUDE_NO_NUMBA=1`` is not set;
+- :data:`NUMBA` is True when numba is installed and ``ATTITUDE_NO_NUMBA=1`` is not set;
 - :func:`jit` is ``numba.njit(cache=True, nogil=True, error_model="numpy")`` then, else the
-  identity.  No ``fastmath``: the compiled path must round as IEEE arithmetic does, so
-  that it agrees with the numpy fallback to round-off (``tests/test_compiled.py``);
+  identity (numba is imported on the first call of a kernel, not with this module).  No
+  ``fastmath``: the compiled path must round as IEEE arithmetic does, so that it agrees
+  with the numpy fallback to round-off (``tests/test_compiled.py``);
 - :func:`ellipj` (Jacobi ``sn, cn, dn``), :func:`elliprf` and :func:`elliprj`
   (Carlson's symmetric integrals): the algorithms of ``scipy.special`` (Cephes' AGM
   for ``ellipj``, Carlson's duplication for ``R_F``, ``R_J``), as scalar code;
@@ -41,16 +42,22 @@ References
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import hashlib
+import importlib.util
 import math
 import os
+import sys
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
-__all__ = ["NUMBA", "jit", "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
+__all__ = ["NUMBA", "jit", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
+           "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
 
 #: Unit roundoff of float64 (half the spacing of 1.0): the AGM's stopping test (Cephes'
 #: MACHEP) and Carlson's ``r``.
@@ -106,12 +113,163 @@ def _drop_stale_cache() -> None:
         return
 
 
-_NB = _numba()
-if _NB is not None:
-    _drop_stale_cache()
-#: True when the kernels below are compiled by numba (importable and not disabled by the
-#: environment variable ``ATTITUDE_NO_NUMBA=1``); False: they run as plain Python.
-NUMBA = _NB is not None
+#: The message :func:`jit`'s kernels print on stderr, once per process, when numba compiles
+#: them (not when it loads them from its cache).
+COMPILE_NOTICE = "attitude: compiling the propagation kernels (first run only, ~10 s)..."
+#: Whether to print :data:`COMPILE_NOTICE` (:func:`set_compile_notice`; off with the
+#: environment variable ``ATTITUDE_QUIET=1``); ``_notice[1]``: printed already.
+_notice = [os.environ.get("ATTITUDE_QUIET", "") in ("", "0"), False]
+#: The dispatchers :func:`jit` made (a compile of any other numba function says nothing).
+_KERNELS: set = set()
+
+
+def set_compile_notice(enabled: bool) -> bool:
+    """Say (``True``, the default) or not on stderr when numba compiles the kernels, which
+    takes ~10 s the first time they run (afterwards numba loads them from its cache and
+    nothing is said).  The ``--quiet`` of ``attitude`` and ``ATTITUDE_QUIET=1`` turn it off.
+
+    Returns the previous setting.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import set_compile_notice
+    >>> previous = set_compile_notice(False)
+    >>> set_compile_notice(previous)
+    False
+    """
+    previous, _notice[0] = _notice[0], bool(enabled)
+    return previous
+
+
+@contextlib.contextmanager
+def quiet_compiles(quiet: bool = True):
+    """A context in which, if ``quiet``, compiling the kernels says nothing (the
+    ``--quiet`` of ``attitude``); the setting of :func:`set_compile_notice` comes back
+    after it.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import quiet_compiles
+    >>> with quiet_compiles():
+    ...     pass
+    """
+    previous = set_compile_notice(_notice[0] and not quiet)
+    try:
+        yield
+    finally:
+        set_compile_notice(previous)
+
+
+def _say_compiling(dispatcher) -> None:
+    """Print :data:`COMPILE_NOTICE` once, when one of :func:`jit`'s kernels compiles."""
+    if _notice[0] and not _notice[1] and dispatcher in _KERNELS:
+        _notice[1] = True
+        print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+
+def _listen_to_compiles(numba) -> None:
+    """Call :func:`_say_compiling` when numba compiles a function: its ``numba:compile``
+    event comes on a compile only, not on a load from the cache (numba's event API; a
+    numba without it compiles in silence)."""
+    try:
+        event = numba.core.event
+
+        class CompileNotice(event.Listener):
+            def on_start(self, ev):
+                _say_compiling(ev.data["dispatcher"])
+
+            def on_end(self, ev):
+                pass
+
+        event.register("numba:compile", CompileNotice())
+    except (AttributeError, TypeError):   # pragma: no cover - numba's API changed
+        return
+
+
+#: True when the kernels below are compiled by numba (installed and not disabled by the
+#: environment variable ``ATTITUDE_NO_NUMBA=1``); False: they run as plain Python.  numba
+#: itself is imported on the first call of a kernel, not with this module: ``import
+#: numba`` takes ~1 s, which a torque-free propagation does not need.
+NUMBA = (os.environ.get("ATTITUDE_NO_NUMBA", "") != "1"
+         and importlib.util.find_spec("numba") is not None)
+#: The numba module once :func:`_load_numba` ran (None: not yet, or numba failed to import
+#: and the kernels run as plain Python).
+_NB = None
+_LOADED = threading.Event()
+_LOCK = threading.Lock()
+
+
+class _Kernel:
+    """A function :func:`jit` compiles: its numba dispatcher is made, with those of every
+    other kernel, on the first call of any kernel (:func:`_load_numba`)."""
+
+    def __init__(self, function):
+        functools.update_wrapper(self, function)
+        self.py_func = function
+        self.dispatcher = None
+        _PENDING.append(self)
+
+    def __call__(self, *args, **kwargs):
+        if not _LOADED.is_set():      # (not self.dispatcher: it is set before the rebinding)
+            _load_numba()
+        return self.dispatcher(*args, **kwargs)
+
+    def __getattr__(self, name):        # the dispatcher's (signatures, stats, ...)
+        if name.startswith("__") or name in ("py_func", "dispatcher"):
+            raise AttributeError(name)
+        if not _LOADED.is_set():
+            _load_numba()
+        return getattr(self.dispatcher, name)
+
+    def __repr__(self) -> str:
+        return f"<attitude kernel {self.__qualname__} (numba not loaded yet)>"
+
+
+#: The kernels made before numba was imported (:class:`_Kernel`).
+_PENDING: list[_Kernel] = []
+
+
+def _njit(numba, function):
+    """``function`` compiled by numba, lazily (on its first call), as :func:`jit` says."""
+    try:
+        kernel = numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+    except RuntimeError:          # no file to cache it beside (typed at a prompt, doctest)
+        kernel = numba.njit(nogil=True, error_model="numpy")(function)
+    _KERNELS.add(kernel)
+    return kernel
+
+
+def _rebind(namespace: dict) -> None:
+    """Put the dispatcher in place of each :class:`_Kernel` in ``namespace`` (numba reads
+    the functions a kernel calls from its module's globals when it compiles it)."""
+    for key, value in list(namespace.items()):
+        if isinstance(value, _Kernel) and value.dispatcher is not None:
+            namespace[key] = value.dispatcher
+
+
+def _load_numba() -> None:
+    """Import numba and make the dispatchers of the kernels made so far, in the modules of
+    the package and of the kernels; once, on the first call of a kernel."""
+    global _NB
+    with _LOCK:
+        if _LOADED.is_set():
+            return
+        _NB = _numba()
+        if _NB is not None:
+            _drop_stale_cache()
+            _listen_to_compiles(_NB)
+        for kernel in _PENDING:
+            kernel.dispatcher = (kernel.py_func if _NB is None
+                                 else _njit(_NB, kernel.py_func))
+        spaces = {id(k.py_func.__globals__): k.py_func.__globals__ for k in _PENDING}
+        for name, module in list(sys.modules.items()):
+            if name.split(".")[0] == "attitude" and isinstance(
+                    getattr(module, "__dict__", None), dict):
+                spaces[id(module.__dict__)] = module.__dict__
+        for namespace in spaces.values():
+            _rebind(namespace)
+        _PENDING.clear()
+        _LOADED.set()
 
 
 def jit(function):
@@ -120,7 +278,11 @@ def jit(function):
 
     The compiled function keeps the Python one as ``.py_func``.  Compiled code is cached
     beside the source (numba's ``__pycache__``), or not cached when there is no source
-    file.
+    file.  numba is imported on the first call of any kernel (until then a kernel is a
+    stand-in that makes the numba dispatchers of all of them and puts them in its
+    place).  When numba compiles a kernel (not when it loads it from the cache), the
+    first time in the process, :data:`COMPILE_NOTICE` goes to stderr
+    (:func:`set_compile_notice`).
 
     Examples
     --------
@@ -131,12 +293,14 @@ def jit(function):
     >>> twice(1.5)
     3.0
     """
-    if _NB is None:
+    if not NUMBA:
         return function
-    try:
-        return _NB.njit(cache=True, nogil=True, error_model="numpy")(function)
-    except RuntimeError:          # no file to cache it beside (typed at a prompt, doctest)
-        return _NB.njit(nogil=True, error_model="numpy")(function)
+    if not _LOADED.is_set():
+        return _Kernel(function)
+    if _NB is None:               # numba failed to import: plain Python
+        return function
+    _rebind(function.__globals__)
+    return _njit(_NB, function)
 
 
 def each_on_cores(run, n: int):

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from attitude.app import cli
+from attitude.app.commands import run as cli  # the summary of `attitude run`
 from attitude.app.scenario import load_scenario, run_scenario
 from tests.app.test_scenario import GOOD, write
 

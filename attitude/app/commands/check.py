@@ -1,0 +1,145 @@
+"""``attitude check``: run scenarios and compare them with their ``[expect]`` tables."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import tomllib
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from ...foundations.errors import AttitudeError, PropagationError
+from ...photometry.config import run_lightcurve  # photometry (issue 15)
+from ..scenario import load_scenario, run_scenario
+from .common import (
+    EXIT_EXPECTATION,
+    EXIT_INPUT,
+    EXIT_OK,
+    EXIT_PROPAGATION,
+    expectation_line,
+    one_line,
+)
+
+#: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
+#: is the interface, tested in tests/app/test_cli.py).
+__all__ = []
+
+
+def _check_targets(paths) -> tuple[list[Path], list[str]]:
+    """Scenario files named by ``paths`` (files, or folders searched for ``*.toml``)."""
+    files, errors = [], []
+    for p in map(Path, paths):
+        if p.is_dir():
+            found = sorted(f for f in p.rglob("*.toml") if f.is_file())
+            if not found:
+                errors.append(f"{p}: no *.toml scenario files in this folder")
+            files.extend(found)
+        elif p.is_file():
+            files.append(p)
+        else:
+            errors.append(f"{p}: no such file or folder")
+    return list(dict.fromkeys(files)), errors
+
+
+def _check_one(path: str) -> dict:
+    """Run one scenario for ``attitude check`` (in a worker process): a plain dict."""
+    start = time.perf_counter()
+    out = {"path": path, "status": "ok", "expect": [], "message": ""}
+    try:
+        with open(path, "rb") as fh:
+            has_expect = isinstance(tomllib.load(fh).get("expect"), dict)
+    except (OSError, tomllib.TOMLDecodeError):
+        has_expect = True          # let load_scenario report it in its own words
+    if not has_expect:
+        out["status"] = "skipped"
+        return out
+    try:
+        result = run_scenario(load_scenario(path), write_outputs=False)
+    except PropagationError as exc:
+        out.update(status="propagation", message=str(exc))
+    except (AttitudeError, OSError) as exc:
+        out.update(status="input", message=one_line(exc))
+    except Exception as exc:  # noqa: BLE001 - a bug: report it, keep checking the others
+        out.update(status="propagation",
+                   message=f"{path}: internal error: {type(exc).__name__}: "
+                           f"{one_line(exc)}")
+    else:
+        out["name"] = result.scenario.name
+        out["expect"] = [{k: v for k, v in e.items()} for e in result.expectations]
+        # --- photometry (issue 15): the lightcurve expectations ---
+        if result.scenario.photometry is not None and result.scenario.photometry.expect:
+            try:
+                lc_run = run_lightcurve(result.scenario, result.scenario.photometry,
+                                        write=False)
+                out["expect"].extend(lc_run.expect)
+            except AttitudeError as exc:
+                out.update(status="input", message=str(exc))
+        # --- end photometry ---
+    if out["message"] and path not in out["message"]:
+        out["message"] = f"{path}: {out['message']}"
+    out["seconds"] = time.perf_counter() - start
+    return out
+
+
+def _check_line(path: str, e: dict) -> str:
+    """``pass  scenarios/apophis.toml  precession: expected 27.38 +/- 0.0821 h, got ...``"""
+    status = "pass" if e["ok"] else "FAIL"
+    return f"{status}  {path}  " + expectation_line(e).split(" ", 1)[1].lstrip()
+
+
+def _default_jobs() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def command(args) -> int:
+    files, errors = _check_targets(args.paths)
+    for message in errors:
+        print(f"attitude: error: {message}", file=sys.stderr)
+    jobs = args.jobs or _default_jobs()
+    if jobs < 1:
+        print("attitude: error: --jobs: must be at least 1", file=sys.stderr)
+        return EXIT_INPUT
+    start = time.perf_counter()
+    names = [str(f) for f in files]
+    if jobs == 1 or len(names) <= 1:
+        results = map(_check_one, names)
+        pool = None
+    else:
+        pool = ProcessPoolExecutor(max_workers=min(jobs, len(names)))
+        results = pool.map(_check_one, names)
+    passed = failed = checked = 0
+    worst = EXIT_INPUT if errors else EXIT_OK
+    try:
+        for res in results:     # in the order given, each as soon as it is done
+            if res["status"] == "skipped":
+                continue
+            checked += 1
+            if res["status"] != "ok":
+                print(f"attitude: error: {res['message']}", file=sys.stderr)
+                print(f"ERROR {res['path']}: {res['message']}")
+                code = EXIT_INPUT if res["status"] == "input" else EXIT_PROPAGATION
+                worst = EXIT_INPUT if EXIT_INPUT in (worst, code) else max(worst, code)
+                continue
+            for e in res["expect"]:
+                print(_check_line(res["path"], e))
+                passed += e["ok"]
+                failed += not e["ok"]
+            if args.times:
+                print(f"time  {res['path']}  {res['seconds']:.2f} s")
+            sys.stdout.flush()
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    if checked == 0 and not errors:
+        print("attitude: error: no scenario with an [expect] table in "
+              + ", ".join(args.paths), file=sys.stderr)
+        return EXIT_INPUT
+    print(f"{passed} passed, {failed} failed ({checked} scenarios in "
+          f"{time.perf_counter() - start:.1f} s)")
+    if worst != EXIT_OK:
+        return worst
+    return EXIT_EXPECTATION if failed else EXIT_OK

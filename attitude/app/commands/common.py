@@ -1,0 +1,48 @@
+"""What the commands share: the exit codes and the text of numbers, durations and
+expectations (no heavy imports: :mod:`attitude.app.cli` uses it to build its parser)."""
+
+from __future__ import annotations
+
+#: The exit codes; the formatting helpers below serve the commands only.
+__all__ = ["EXIT_OK", "EXIT_EXPECTATION", "EXIT_INPUT", "EXIT_PROPAGATION"]
+
+EXIT_OK, EXIT_EXPECTATION, EXIT_INPUT, EXIT_PROPAGATION = 0, 1, 2, 3
+
+
+def format_seconds(s: float, digits: int = 10) -> str:
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if abs(s) >= 2 * size:
+            return f"{s / size:.{digits}g} {unit}"
+    return f"{s:.{digits}g} s"
+
+
+def number(x) -> str:
+    return f"{x:.10g}" if isinstance(x, float) else str(x)
+
+
+def expectation_cells(e: dict) -> tuple[str, str, str, str]:
+    """``(key, expected, tolerance, got)`` of one expectation, as text (units included)."""
+    unit = f" {e['unit']}" if "unit" in e else ""
+    if "tolerance" in e:
+        expected, tolerance = f"{number(e['expected'])}{unit}", f"+/- {e['tolerance']:.3g}{unit}"
+    elif e["key"] in ("regime", "resonance"):        # resonance: the spin-orbit wing
+        expected, tolerance = e["expected"], "exact"
+    else:
+        expected, tolerance = f"<= {e['expected']:.3g}", "upper bound"
+    got = "absent" if e["got"] is None else number(e["got"]) + unit
+    key = e["key"] + (f" (at {e['at']})" if "at" in e else "")      # spin_period
+    return key, expected, tolerance, got
+
+
+def expectation_line(e: dict) -> str:
+    """``ok   precession: expected 27.38 +/- 0.0821 h, got 27.38``."""
+    key, expected, tolerance, got = expectation_cells(e)
+    if "tolerance" in e:
+        expected = f"{number(e['expected'])} {tolerance}"
+    return f"{'ok  ' if e['ok'] else 'FAIL'} {key}: expected {expected}, got {got}"
+
+
+
+def one_line(text: str) -> str:
+    """``text`` on one line (messages quoting other tools may hold newlines)."""
+    return " ".join(str(text).split())
