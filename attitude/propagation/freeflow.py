@@ -16,33 +16,21 @@ References
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from scipy import special as sp
 
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
-from ..model.freebody import EQUAL_MOMENTS_RTOL, PURE_SPIN_TOL_UNSCALED
+from ..model.freebody import EQUAL_MOMENTS_RTOL
 from . import compiled
 
 __all__ = ["free_flow"]
-
-# The free flow's tolerances are those of attitude.freebody: EQUAL_MOMENTS_RTOL (a
-# spherical body rotates uniformly) and PURE_SPIN_TOL_UNSCALED (a principal-axis spin
-# rotates uniformly; this kernel works on unscaled rates, see its comment there).
-
-
-#: scipy.special.ellipj (Cephes) switches to its expansion about m = 1 from this m on; the
-#: expansion fails past the first quarter period (sn > 1, cn ~ -3e5 at u = 40,
-#: m = 1 - 1e-11), so there the free flow takes compiled.ellipj (Landen from 1 - m).
-_CEPHES_NEAR1 = 0.9999999999
 
 
 class FreeConstants:
     """Per-body constants of the free flow: principal moments scaled to O(1) by a power
     of two (exact), the symmetry flags and the characteristics ``nu`` of both kernel
-    frames."""
+    frames; ``rows`` (N, 7) the same as the rows of :meth:`row` (the compiled kernel's
+    ``c``)."""
 
     def __init__(self, moments: np.ndarray):
         moments = np.atleast_2d(np.asarray(moments, dtype=float))
@@ -50,6 +38,7 @@ class FreeConstants:
         m = moments / np.ldexp(1.0, e)[:, None]            # exact power-of-two scaling
         A, B, C = m[:, 0].copy(), m[:, 1].copy(), m[:, 2].copy()
         self.A, self.B, self.C = A, B, C
+        # a spherical body rotates uniformly (attitude.model.freebody.EQUAL_MOMENTS_RTOL)
         self.spherical = (C - A) <= EQUAL_MOMENTS_RTOL * C
         # on the separatrix (L^2 = 2EB exactly) take the kernel frame with the larger
         # gap I3 - I2 (a prolate body spinning in its B-C plane goes to LAM)
@@ -57,6 +46,9 @@ class FreeConstants:
         with np.errstate(divide="ignore", invalid="ignore"):
             self.nu_sam = fb.characteristic(A, B, C)        # kernel moments (A, B, C)
             self.nu_lam = fb.characteristic(C, B, A)        # kernel moments (C, B, A)
+        self.rows = np.ascontiguousarray(np.stack(
+            [A, B, C, self.spherical.astype(float), self.lam_on_tie.astype(float),
+             self.nu_sam, self.nu_lam], axis=1))
 
     def row(self, i: int) -> tuple:
         """Plain-float constants of body ``i`` (for the one-body kernel)."""
@@ -65,195 +57,41 @@ class FreeConstants:
                 float(self.nu_sam[i]), float(self.nu_lam[i]))
 
 
-def free_flow_batch(c: FreeConstants, q: np.ndarray, w: np.ndarray, h: float):
-    """Exact free flow of ``N`` bodies over ``h`` (vectorised); see :func:`free_flow`.
+# One source: the formulas are those of attitude.propagation.compiled.free_step, which
+# runs compiled on each body when numba is there (free_flow_bodies) and on the arrays
+# of all bodies at once when it is not (numpy: a Python loop over the bodies would be
+# ~100x slower); see the notes there.
+def free_flow_batch(c: FreeConstants, q: np.ndarray, w: np.ndarray, h):
+    """Exact free flow of ``N`` bodies over ``h`` (a float, or one per body); see
+    :func:`free_flow`.
 
     ``q`` (N, 4) principal -> inertial, ``w`` (N, 3) principal rates; new arrays out.
     """
-    A, B, C = c.A, c.B, c.C
-    o1, o2, o3 = w[:, 0], w[:, 1], w[:, 2]
+    if compiled.NUMBA:
+        qn = np.array(q, dtype=float, order="C")
+        wn = np.array(w, dtype=float, order="C")
+        hh = np.ascontiguousarray(np.broadcast_to(np.asarray(h, dtype=float), (len(qn),)))
+        compiled.free_flow_bodies(c.rows, qn, wn, hh)
+        return qn, wn
     with np.errstate(all="ignore"):
-        # kernel frame: SAM (A, B, C), or LAM (C, B, A) along (e3, -e2, e1)      (S1)
-        delta = fb.separatrix_gap(A, B, C, o1, o3)                     # L^2 - 2EB
-        lam = (delta < 0) | ((delta == 0) & c.lam_on_tie)
-        I1, I2, I3 = fb.kernel_moments(A, B, C, lam)
-        w1, w2, w3 = fb.kernel_vector(o1, o2, o3, lam)
-        nu = np.where(lam, c.nu_lam, c.nu_sam)
-        d21, d32, d31, Q1, Q3, Dk, Lsq = fb.invariants(I1, I2, I3, w1, w2, w3)
-        L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
-        L = np.sqrt(Lsq)
-        w2s = w2 * w2
-        m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
-        m = np.minimum(np.maximum(m, 0.0), 1.0)
-        m1 = np.minimum(np.maximum(m1, 0.0), 1.0)
-        # u = u0 + lambda t with dn(u) = w3 / a3 > 0: lambda has the sign of w3 (I3 - I2)
-        s = np.where(w3 < 0, -1.0, 1.0)
-        lamb = np.where(lam, -s, s) * np.sqrt(lam2)
-        v = lamb * h
-        sn, cn, dn, _ = sp.ellipj(v, m)
-        for i in np.flatnonzero(m >= _CEPHES_NEAR1):
-            sn[i], cn[i], dn[i] = compiled.ellipj(float(v[i]), float(m[i]))
-        snl = sn / lamb
-        # rates by the addition theorems, no amplitude in a denominator          (S2)
-        D = 1.0 - (I2 * d21 / Q3) * w2s * (sn * sn)
-        n1 = (w1 * cn - (d32 / I1) * w2 * w3 * snl * dn) / D
-        n2 = (w2 * cn * dn + (d31 / I2) * w1 * w3 * snl) / D
-        n3 = (w3 * dn - (d21 / I3) * w1 * w2 * snl * cn) / D
-        # precession angle about L                                               (S3)
-        a1 = np.sqrt(Q1 / (I1 * d31))
-        a2 = np.sqrt(Q1 / (I2 * d32))
-        a3 = s * np.sqrt(Q3 / (I3 * d31))
-        sn0 = np.minimum(np.maximum(w2 / a2, -1.0), 1.0)
-        cn0 = np.minimum(np.maximum(w1 / a1, -1.0), 1.0)
-        dn0 = np.minimum(w3 / a3, 1.0)
-        sn1 = np.minimum(np.maximum(n2 / a2, -1.0), 1.0)
-        cn1 = np.minimum(np.maximum(n1 / a1, -1.0), 1.0)
-        dn1 = np.minimum(n3 / a3, 1.0)
-        nu3 = nu / 3.0
-        S0 = nu3 * sn0 ** 3 * sp.elliprj(cn0 * cn0, dn0 * dn0, 1.0, 1.0 + nu * sn0 * sn0)
-        S1 = nu3 * sn1 ** 3 * sp.elliprj(cn1 * cn1, dn1 * dn1, 1.0, 1.0 + nu * sn1 * sn1)
-        S0 = np.where(nu == 0, 0.0, S0)
-        S1 = np.where(nu == 0, 0.0, S1)
-        p0 = cn0 >= 0                                 # parity of the half-period window
-        p1 = cn1 >= 0
-        dwin = np.where(p0 == p1, 0.0, np.where(v >= 0, 1.0, -1.0))
-        far = np.abs(v) >= math.pi                    # 2K >= pi: may span > 1 window
-        if far.any():
-            K = sp.elliprf(0.0, m1, 1.0)
-            uh = sn0 * sp.elliprf(cn0 * cn0, dn0 * dn0, 1.0)
-            u0 = np.where(p0, uh, np.copysign(2.0 * K, sn0) - uh)
-            general = np.rint((u0 + v) / (2.0 * K)) - np.rint(u0 / (2.0 * K))
-            dwin = np.where(far & (m1 > 0), general, dwin)
-        dJ = np.where(p1, S1, -S1) - np.where(p0, S0, -S0)
-        if (dwin != 0).any():
-            JK = nu3 * sp.elliprj(0.0, m1, 1.0, 1.0 + nu)
-            dJ = dJ + np.where(dwin == 0, 0.0, 2.0 * dwin * JK)
-        c1 = L * d31 / (I1 * I3)
-        dphi = h * (L / I3 + c1) - c1 * dJ / lamb
-        # attitude: q(t+h) = q(t) E0^-1 E1, E = Rz(phi) Rx(theta) Rz(psi)       (S4)
-        ct0, st0 = fb.half_theta(L1, L2, L3)
-        M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
-        ct1, st1 = fb.half_theta(M1, M2, M3)
-        e = fb.euler313_quaternion(ct0, st0, 0.0, np.arctan2(L1, L2))
-        f = fb.euler313_quaternion(ct1, st1, dphi, np.arctan2(M1, M2))
-        gx, gy, gz, gw = quat.multiply_parts(quat.conjugate_parts(e), f)
-        gx, gy, gz = fb.kernel_vector(gx, gy, gz, lam)      # the step in principal axes
-        p1_, p2_, p3_ = fb.kernel_vector(n1, n2, n3, lam)
-        # uniform rotation: spherical body, principal-axis spin, rest, lambda = 0 (S5)
-        mid = np.maximum(np.minimum(np.abs(L1), np.abs(L2)),
-                         np.minimum(np.maximum(np.abs(L1), np.abs(L2)), np.abs(L3)))
-        uniform = (c.spherical | (mid <= PURE_SPIN_TOL_UNSCALED * L) | ~(lam2 > 0)
-                   | ~np.isfinite(gx + gy + gz + gw + p1_ + p2_ + p3_))
-        if uniform.any():
-            wn = np.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
-            half = 0.5 * wn * h
-            sh = np.where(wn > 0, np.sin(half) / wn, 0.0)
-            gx = np.where(uniform, sh * o1, gx)
-            gy = np.where(uniform, sh * o2, gy)
-            gz = np.where(uniform, sh * o3, gz)
-            gw = np.where(uniform, np.cos(half), gw)
-            p1_ = np.where(uniform, o1, p1_)
-            p2_ = np.where(uniform, o2, p2_)
-            p3_ = np.where(uniform, o3, p3_)
+        gx, gy, gz, gw, p1, p2, p3 = compiled.free_step(
+            c.A, c.B, c.C, c.spherical, c.lam_on_tie, c.nu_sam, c.nu_lam,
+            w[:, 0], w[:, 1], w[:, 2], h)
     out = quat.multiply(q, np.stack([gx, gy, gz, gw], axis=-1))
     out /= np.sqrt(np.sum(out * out, axis=1, keepdims=True))
     wout = np.empty_like(w)
-    wout[:, 0], wout[:, 1], wout[:, 2] = p1_, p2_, p3_
+    wout[:, 0], wout[:, 1], wout[:, 2] = p1, p2, p3
     return out, wout
 
 
-def _uniform1(q, o1, o2, o3, h):
-    wn = math.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
-    half = 0.5 * wn * h
-    sh = math.sin(half) / wn if wn > 0 else 0.0
-    return qmul_unit(q, (sh * o1, sh * o2, sh * o3, math.cos(half))), (o1, o2, o3)
-
-
-def qmul_unit(q, g):
-    """Normalised product ``q g`` of component quaternions (plain floats)."""
-    nx, ny, nz, nw = quat.multiply_parts(q, g)
-    r = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
-    return (nx * r, ny * r, nz * r, nw * r)
-
-
-def _clip1(x, lo, hi):
-    return lo if x < lo else (hi if x > hi else x)
-
-
-def free_flow_tuple(k: tuple, q: tuple, w: tuple, h: float):
-    """The same step as :func:`free_flow_batch` for one body in plain floats (a numpy
-    call on one element costs as much as ~20 float operations)."""
-    A, B, C, spherical, lam_on_tie, nu_sam, nu_lam = k
-    o1, o2, o3 = w
-    if spherical:
-        return _uniform1(q, o1, o2, o3, h)
-    delta = fb.separatrix_gap(A, B, C, o1, o3)
-    lam = delta < 0 or (delta == 0 and lam_on_tie)
-    I1, I2, I3 = fb.kernel_moments(A, B, C, lam)
-    w1, w2, w3 = fb.kernel_vector(o1, o2, o3, lam)
-    nu = nu_lam if lam else nu_sam
-    d21, d32, d31, Q1, Q3, Dk, Lsq = fb.invariants(I1, I2, I3, w1, w2, w3)
-    L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
-    L = math.sqrt(Lsq)
-    a_, b_, c_ = abs(L1), abs(L2), abs(L3)
-    mid = max(min(a_, b_), min(max(a_, b_), c_))
-    w2s = w2 * w2
-    if mid <= PURE_SPIN_TOL_UNSCALED * L or not d32 * Q3 > 0:
-        return _uniform1(q, o1, o2, o3, h)
-    m, m1, lam2 = fb.jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
-    m = _clip1(m, 0.0, 1.0)
-    m1 = _clip1(m1, 0.0, 1.0)
-    s = -1.0 if w3 < 0 else 1.0
-    lamb = (-s if lam else s) * math.sqrt(lam2)
-    v = lamb * h
-    if m >= _CEPHES_NEAR1:
-        sn, cn, dn = compiled.ellipj(float(v), float(m))
-    else:
-        sn, cn, dn, _ = sp.ellipj(v, m)
-        sn, cn, dn = float(sn), float(cn), float(dn)
-    snl = sn / lamb
-    D = 1.0 - (I2 * d21 / Q3) * w2s * (sn * sn)
-    n1 = (w1 * cn - (d32 / I1) * w2 * w3 * snl * dn) / D
-    n2 = (w2 * cn * dn + (d31 / I2) * w1 * w3 * snl) / D
-    n3 = (w3 * dn - (d21 / I3) * w1 * w2 * snl * cn) / D
-    a1 = math.sqrt(Q1 / (I1 * d31))
-    a2 = math.sqrt(Q1 / (I2 * d32))
-    a3 = s * math.sqrt(Q3 / (I3 * d31))
-    sn0 = _clip1(w2 / a2, -1.0, 1.0)
-    cn0 = _clip1(w1 / a1, -1.0, 1.0)
-    dn0 = min(w3 / a3, 1.0)
-    sn1 = _clip1(n2 / a2, -1.0, 1.0)
-    cn1 = _clip1(n1 / a1, -1.0, 1.0)
-    dn1 = min(n3 / a3, 1.0)
-    if nu == 0:
-        S0 = S1 = 0.0
-    else:
-        nu3 = nu / 3.0
-        S0 = nu3 * sn0 ** 3 * float(sp.elliprj(cn0 * cn0, dn0 * dn0, 1.0, 1.0 + nu * sn0 * sn0))
-        S1 = nu3 * sn1 ** 3 * float(sp.elliprj(cn1 * cn1, dn1 * dn1, 1.0, 1.0 + nu * sn1 * sn1))
-    p0, p1 = cn0 >= 0, cn1 >= 0
-    dwin = 0.0 if p0 == p1 else (1.0 if v >= 0 else -1.0)
-    if abs(v) >= math.pi and m1 > 0:
-        K = float(sp.elliprf(0.0, m1, 1.0))
-        uh = sn0 * float(sp.elliprf(cn0 * cn0, dn0 * dn0, 1.0))
-        u0 = uh if p0 else math.copysign(2.0 * K, sn0) - uh
-        dwin = float(round((u0 + v) / (2.0 * K)) - round(u0 / (2.0 * K)))
-    dJ = (S1 if p1 else -S1) - (S0 if p0 else -S0)
-    if dwin != 0:
-        dJ += 2.0 * dwin * (nu / 3.0) * float(sp.elliprj(0.0, m1, 1.0, 1.0 + nu))
-    c1 = L * d31 / (I1 * I3)
-    dphi = h * (L / I3 + c1) - c1 * dJ / lamb
-    ct0, st0 = fb.half_theta(L1, L2, L3)
-    M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
-    ct1, st1 = fb.half_theta(M1, M2, M3)
-    e = fb.euler313_quaternion(ct0, st0, 0.0, math.atan2(L1, L2))
-    f = fb.euler313_quaternion(ct1, st1, dphi, math.atan2(M1, M2))
-    gx, gy, gz, gw = quat.multiply_parts(quat.conjugate_parts(e), f)
-    gx, gy, gz = fb.kernel_vector(gx, gy, gz, lam)          # the step in principal axes
-    wn = fb.kernel_vector(n1, n2, n3, lam)
-    if not math.isfinite(gx + gy + gz + gw + wn[0] + wn[1] + wn[2]):
-        return _uniform1(q, o1, o2, o3, h)
-    return qmul_unit(q, (gx, gy, gz, gw)), wn
+def free_flow_tuple(k, q: tuple, w: tuple, h: float):
+    """The same step for one body on tuples of floats (``k``: :meth:`FreeConstants.row`,
+    or that row as an array): :func:`attitude.propagation.compiled.free_flow_one`,
+    compiled or plain."""
+    qa = np.array(q, dtype=float)
+    wa = np.array(w, dtype=float)
+    compiled.free_flow_one(np.array(k, dtype=float), qa, wa, float(h))
+    return tuple(qa.tolist()), tuple(wa.tolist())
 
 
 def free_flow(moments, quat, omega, h):

@@ -6,15 +6,23 @@ operations of a batch (arrays) and of one body (plain floats), and the kick itse
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..foundations import quaternion as quat
 from ..foundations.errors import InvalidStateError
 from ..model.body import RigidBody, as_bodies, to_body_frame, to_principal_frame
-from .freeflow import FreeConstants, free_flow_batch, free_flow_tuple, qmul_unit
+from .freeflow import FreeConstants, free_flow_batch, free_flow_tuple
 
 __all__: list[str] = []
 
+
+def qmul_unit(q, g):
+    """Normalised product ``q g`` of component quaternions (plain floats)."""
+    nx, ny, nz, nw = quat.multiply_parts(q, g)
+    r = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+    return (nx * r, ny * r, nz * r, nw * r)
 
 def _terms(torques) -> list:
     """Flatten torque models (sums included) into their terms."""
@@ -213,7 +221,7 @@ class OneOps:
 
     def __init__(self, system: System):
         self.s = system
-        self.k = system.free.row(0)
+        self.k = system.free.rows[0].copy()
         self.inv = tuple(float(x) for x in system.inv_moments[0])
         self.identity = system.identity
         self.q_bp_t = tuple(system.q_bp[0].tolist())
