@@ -83,11 +83,11 @@ def _numba():
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "compiled_dop853.py")
 #: The sources compiled into the kernels: theirs, the Kepler solver of
-#: :mod:`attitude.model.orbit` (compiled by :mod:`.compiled_torques`), the free-body and
-#: quaternion helpers (compiled by this module); numba keeps those functions' own caches
-#: fresh, not the callers'.
-KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py", "../model/freebody.py",
-                                   "../foundations/quaternion.py")
+#: :mod:`attitude.model.orbit` and the shadow test of :mod:`attitude.model.shadow` (compiled
+#: by :mod:`.compiled_torques`), the free-body and quaternion helpers (compiled by this
+#: module); numba keeps those functions' own caches fresh, not the callers'.
+KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py", "../model/shadow.py",
+                                   "../model/freebody.py", "../foundations/quaternion.py")
 
 
 def _drop_stale_cache() -> None:
