@@ -3,7 +3,9 @@ splitting integrator (:mod:`attitude.propagation.splitting`).
 
 Jacobi elliptic functions for the rates and an elliptic integral of the third kind for
 the precession angle (Celledoni, Fassò, Säfström & Zanna 2008); the formulas, numbered
-(S1)-(S5), are in :func:`free_flow`.
+(S1)-(S5), are in :func:`free_flow`, their code in one place,
+:func:`attitude.propagation.compiled.free_step` (compiled for one body, or numpy's on a
+batch), which this module applies to batches and single bodies.
 
 References
 ----------
@@ -152,8 +154,12 @@ def free_flow(moments, quat, omega, h):
 
     Accuracy: a few ulp per step (tested against
     :func:`attitude.propagation.torquefree.free_rotation` in ``tests/test_splitting.py``);
-    near the separatrix the motion itself is ill-conditioned and ``scipy.special.ellipj``
-    loses ~``eps / m1`` relative.
+    near the separatrix the motion itself is ill-conditioned and ``sn, cn, dn`` lose
+    ~``eps / m1`` relative.
+
+    The formulas are computed by :func:`attitude.propagation.compiled.free_step`, their
+    one source: compiled body by body when numba is installed, else by numpy on all the
+    bodies at once.
 
     Examples
     --------
