@@ -50,6 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..foundations import elliptic as el
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
@@ -84,10 +85,11 @@ KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "compiled_dop853.py")
 #: The sources compiled into the kernels: theirs, the Kepler solver of
 #: :mod:`attitude.model.orbit` and the shadow test of :mod:`attitude.model.shadow` (compiled
-#: by :mod:`.compiled_torques`), the free-body and quaternion helpers (compiled by this
-#: module); numba keeps those functions' own caches fresh, not the callers'.
+#: by :mod:`.compiled_torques`), the free-body, quaternion and Landen helpers (compiled by
+#: this module); numba keeps those functions' own caches fresh, not the callers'.
 KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py", "../model/shadow.py",
-                                   "../model/freebody.py", "../foundations/quaternion.py")
+                                   "../model/freebody.py", "../foundations/quaternion.py",
+                                   "../foundations/elliptic.py")
 
 
 def _drop_stale_cache() -> None:
@@ -199,28 +201,28 @@ def _amplitude(a, b, c, twon, u):
 _MU_BASE = 1e-10
 
 
+# the base level and the steps of the chain: attitude.foundations.elliptic's, compiled
+_landen_base = jit(el.landen_base)
+_landen_ascend = jit(el.landen_ascend)
+_landen_descend = jit(el.landen_descend)
+
+
 @jit
 def _landen(x, kp, omk):
     """``sn, cn, dn (x | m)`` for ``m = 1 - kp^2``, ``omk = 1 - kp`` (formed without
     cancellation), by the descending Landen transformation (A&S 16.12.2-4), each level
     without cancellation (``dn = ((1 - g) + g c^2) / (1 + g s^2)``); recursive, one
-    level per call (attitude.elliptic.landen_sncndn, in scalar float64)."""
+    level per call (attitude.foundations.elliptic.landen_sncndn, in scalar float64, on
+    its base level and step)."""
     g = omk / (1.0 + kp)
     omg = 2.0 * kp / (1.0 + kp)
     xs = x / (1.0 + g)
     mu = g * g
     if mu < _MU_BASE:
-        s0 = math.sin(xs)
-        c0 = math.cos(xs)
-        corr = (0.25 * mu) * (xs - s0 * c0)
-        s = s0 - corr * c0
-        c = c0 + corr * s0
-        d = 1.0 - (0.5 * mu) * (s0 * s0)
+        s, c, d = _landen_base(xs, mu)
     else:
-        sq = math.sqrt(kp)
-        s, c, d = _landen(xs, 2.0 * sq / (1.0 + kp), (omk / (1.0 + sq)) ** 2 / (1.0 + kp))
-    inv = 1.0 / (1.0 + g * (s * s))
-    return (1.0 + g) * inv * s, c * d * inv, (omg + g * (c * c)) * inv
+        s, c, d = _landen(xs, *_landen_descend(kp, omk))
+    return _landen_ascend(s, c, d, g, omg)
 
 
 @jit
@@ -238,9 +240,7 @@ def _ellipj_near1(u, m, m1):
         scale *= 1.0 + g
         if g * g < _MU_BASE:
             break
-        sq = math.sqrt(k)
-        o = (o / (1.0 + sq)) ** 2 / (1.0 + k)
-        k = 2.0 * sq / (1.0 + k)
+        k, o = _landen_descend(k, o)
     mu = g * g
     K = scale * (math.pi / 2.0) * (1.0 + mu / 4.0 + 9.0 * mu * mu / 64.0)
     n = math.floor(u / (2.0 * K) + 0.5)
@@ -480,15 +480,15 @@ def _invariants(I1, I2, I3, w1, w2, w3):
     return d21, d32, d31, Q1, Q3, D, L2
 
 
+_half_angles = jit(fb.half_angles)
+
+
 @jit
 def _half_theta(L1, L2, L3):
-    """fb.half_theta, float branch."""
-    rho = math.hypot(L1, L2)
-    Lt = math.hypot(rho, L3)
-    if Lt == 0.0:
+    """fb.half_theta, float branch (its formulas: fb.half_angles, compiled)."""
+    if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
         return math.nan, math.nan
-    h = math.sqrt((Lt + abs(L3)) / (2.0 * Lt))
-    o = rho / (2.0 * Lt * h)
+    h, o = _half_angles(L1, L2, L3)
     if L3 >= 0:
         return h, o
     return o, h
