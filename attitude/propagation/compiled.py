@@ -589,6 +589,13 @@ def free_step(A, B, C, spherical, lam_on_tie, nu_sam, nu_lam, o1, o2, o3, h):
     gx, gy, gz, gw, p1, p2, p3
         The rotation's quaternion components (scalar last, unit to round-off) and the
         rates at ``t + h``.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import free_step
+    >>> g = free_step(0.25, 0.5, 0.75, False, False, 3.0, 1 / 3, 0.0, 0.0, 1.0, 0.5)
+    >>> [round(float(x), 12) for x in g]     # pure spin about C: half a radian about z
+    [0.0, 0.0, 0.247403959255, 0.968912421711, 0.0, 0.0, 1.0]
     """
     # kernel frame: SAM (A, B, C), or LAM (C, B, A) along (e3, -e2, e1)          (S1)
     delta = _separatrix_gap(A, B, C, o1, o3)                            # L^2 - 2EB
@@ -747,6 +754,19 @@ if not NUMBA:
 def free_flow_bodies(c, q, w, h):
     """:func:`free_flow_one` of each body of a batch, in place: ``c`` (N, 7) rows of
     constants, ``q`` (N, 4), ``w`` (N, 3), ``h`` (N,) intervals (the compiled
-    vectorised free flow)."""
+    vectorised free flow).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.compiled import free_flow_bodies, free_flow_one
+    >>> c = np.array([[0.25, 0.5, 0.75, 0, 0, 3.0, 1 / 3]] * 2)
+    >>> q, w = np.array([[0, 0, 0, 1.0]] * 2), np.array([[0.1, 0.2, 1.0]] * 2)
+    >>> free_flow_bodies(c, q, w, np.array([2.5, -2.5]))           # each body its own h
+    >>> q1, w1 = np.array([0, 0, 0, 1.0]), np.array([0.1, 0.2, 1.0])
+    >>> free_flow_one(c[1], q1, w1, -2.5)
+    >>> bool(np.array_equal(q[1], q1) and np.array_equal(w[1], w1))
+    True
+    """
     for i in range(q.shape[0]):
         free_flow_one(c[i], q[i], w[i], h[i])

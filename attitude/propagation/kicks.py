@@ -15,7 +15,7 @@ from ..foundations.errors import InvalidStateError
 from ..model.body import RigidBody, as_bodies, to_body_frame, to_principal_frame
 from .freeflow import FreeConstants, free_flow_batch, free_flow_tuple
 
-__all__: list[str] = []
+__all__ = []  # package-internal: the splitting integrator imports these
 
 
 def qmul_unit(q, g):
