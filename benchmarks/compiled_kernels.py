@@ -7,7 +7,9 @@ Prints, for this machine and one process:
   one numba call added);
 * the same source run as plain Python (``ATTITUDE_NO_NUMBA=1``, the fallback when numba
   is absent);
-* ``splitting._free_flow1``, the current one-body path (plain floats and scipy.special);
+* ``splitting._free_flow1``, the one-body path of the numpy loop (tuples of floats in
+  and out of the same kernel; before the free flow had one source, a plain-float copy
+  with scipy.special);
 * the special functions alone (ns per call, compiled);
 * numba's first-call cost: compiling every kernel into an empty cache, and loading them
   from the cache (each in a fresh interpreter).
@@ -150,7 +152,7 @@ def main():
         ws = [tuple(map(float, x)) for x in omega0]
         t = best_of(lambda: [splitting._free_flow1(rows[i], qs[i], ws[i], h)  # noqa: B023
                              for i in range(n)], repeat=20)
-        print(f"  splitting._free_flow1 (scipy)  : {t / n * 1e6:8.1f} us / step")
+        print(f"  splitting._free_flow1 (tuples) : {t / n * 1e6:8.1f} us / step")
     reps = 2000
     _special(0.7, 0.6, 1)
     _ellipj_only(0.7, 0.6, 1)

@@ -12,11 +12,12 @@ it; it is a path like :class:`attitude.model.orbit.KeplerOrbit` (``position(t)``
   ``b``), their centres ``c`` apart, overlap in a lens whose area is subtracted from the
   Sun's disk (Montenbruck & Gill 2000, *Satellite Orbits*, Sec. 3.4.2): umbra (0),
   penumbra (continuous from 0 to 1), annular eclipse (``1 - b^2/a^2``) and full light (1).
+
+The formulas are those of :func:`attitude.model.shadow.illumination_fraction`, their one
+source (which the compiled radiation-pressure kernel runs compiled).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from astropy import units as u
@@ -24,6 +25,7 @@ from astropy.time import Time, TimeDelta
 
 from ..foundations.constants import EARTH_RADIUS, SUN_RADIUS
 from ..foundations.errors import OrbitError
+from ..model.shadow import illumination_fraction
 from .frames import check_frame, gcrf_to_frame
 from .tabulation import TimeTable
 
@@ -116,55 +118,18 @@ def illumination(r_sat, r_sun, model: str = "conical", *, earth_radius=EARTH_RAD
                          f"{', '.join(SHADOW_MODELS)}", key="shadow")
     r_sat = np.asarray(r_sat, dtype=float)
     r_sun = np.asarray(r_sun, dtype=float)
-    if r_sat.shape == (3,) and r_sun.shape == (3,):   # one epoch: plain floats, 10x faster
-        return np.float64(_illumination_one(r_sat.tolist(), r_sun.tolist(), model,
-                                            earth_radius, sun_radius))
-    if model == "cylindrical":
-        s_hat = r_sun / np.linalg.norm(r_sun, axis=-1, keepdims=True)
-        along = np.sum(r_sat * s_hat, axis=-1)
-        across = np.linalg.norm(r_sat - along[..., None] * s_hat, axis=-1)
-        return np.where((along < 0) & (across < earth_radius), 0.0, 1.0)
-    to_sun = r_sun - r_sat
-    d_sun = np.linalg.norm(to_sun, axis=-1)
-    d_earth = np.linalg.norm(r_sat, axis=-1)
-    a = np.arcsin(sun_radius / d_sun)
-    b = np.arcsin(np.clip(earth_radius / d_earth, -1.0, 1.0))
-    cos_c = -np.sum(r_sat * to_sun, axis=-1) / (d_earth * d_sun)
-    c = np.arccos(np.clip(cos_c, -1.0, 1.0))
-    # lens area of two overlapping disks of radii a, b with centres c apart
-    with np.errstate(invalid="ignore", divide="ignore"):
-        x = (c * c + a * a - b * b) / (2 * c)
-        y = np.sqrt(np.maximum(a * a - x * x, 0.0))
-        lens = (a * a * np.arccos(np.clip(x / a, -1, 1)) + b * b
-                * np.arccos(np.clip((c - x) / b, -1, 1)) - c * y)
-    partial = 1.0 - lens / (np.pi * a * a)
-    return np.select([c >= a + b, c <= b - a, c <= a - b],
-                     [1.0, 0.0, 1.0 - (b * b) / (a * a)], np.clip(partial, 0.0, 1.0))
+    conical = model == "conical"
+    if r_sat.shape == (3,) and r_sun.shape == (3,):   # one epoch: plain floats
+        return np.float64(illumination_fraction(*r_sat.tolist(), *r_sun.tolist(), conical,
+                                                earth_radius, sun_radius))
+    # the one source of the shadow test (attitude.model.shadow) epoch by epoch: a few
+    # microseconds each, as plain Python (the compiled kernels run it compiled)
+    r_sat, r_sun = np.broadcast_arrays(r_sat, r_sun)
+    out = _FRACTION(r_sat[..., 0], r_sat[..., 1], r_sat[..., 2], r_sun[..., 0],
+                    r_sun[..., 1], r_sun[..., 2], conical, float(earth_radius),
+                    float(sun_radius))
+    return np.asarray(out, dtype=float)
 
 
-def _illumination_one(r_sat, r_sun, model, earth_radius, sun_radius) -> float:
-    """:func:`illumination` for one epoch, in floats (the same formulas)."""
-    x, y, z = r_sat
-    if model == "cylindrical":
-        d_sun = math.sqrt(r_sun[0] ** 2 + r_sun[1] ** 2 + r_sun[2] ** 2)
-        along = (x * r_sun[0] + y * r_sun[1] + z * r_sun[2]) / d_sun
-        across2 = max(x * x + y * y + z * z - along * along, 0.0)
-        return 0.0 if (along < 0 and math.sqrt(across2) < earth_radius) else 1.0
-    tx, ty, tz = r_sun[0] - x, r_sun[1] - y, r_sun[2] - z
-    d_sun = math.sqrt(tx * tx + ty * ty + tz * tz)
-    d_earth = math.sqrt(x * x + y * y + z * z)
-    a = math.asin(sun_radius / d_sun)
-    b = math.asin(min(max(earth_radius / d_earth, -1.0), 1.0))
-    cos_c = -(x * tx + y * ty + z * tz) / (d_earth * d_sun)
-    c = math.acos(min(max(cos_c, -1.0), 1.0))
-    if c >= a + b:
-        return 1.0
-    if c <= b - a:
-        return 0.0
-    if c <= a - b:
-        return 1.0 - (b * b) / (a * a)
-    u = (c * c + a * a - b * b) / (2 * c)
-    v = math.sqrt(max(a * a - u * u, 0.0))
-    lens = (a * a * math.acos(min(max(u / a, -1.0), 1.0))
-            + b * b * math.acos(min(max((c - u) / b, -1.0), 1.0)) - c * v)
-    return min(max(1.0 - lens / (math.pi * a * a), 0.0), 1.0)
+#: :func:`illumination_fraction` as a numpy ufunc over arrays of positions.
+_FRACTION = np.frompyfunc(illumination_fraction, 9, 1)

@@ -34,6 +34,9 @@ __all__ = [
     "landen_chain",
     "k_from_chain",
     "landen_sncndn",
+    "landen_base",
+    "landen_ascend",
+    "landen_descend",
     "cel",
 ]
 
@@ -232,9 +235,7 @@ def landen_chain(m, m1):
         mu = g * g
         if not np.any(mu >= MU_BASE_MAX) or len(gs) > 40:
             break
-        sq = np.sqrt(kp)
-        omk = (omk / (1 + sq)) ** 2 / (1 + kp)  # 1 - k'_{i+1} = (1 - sqrt k')^2/(1+k')
-        kp = 2 * sq / (1 + kp)  # k'_{i+1}
+        kp, omk = landen_descend(kp, omk)
     g = np.array(gs, dtype=LD)
     omg = np.array(omgs, dtype=LD)
     return g.astype(np.float64), omg.astype(np.float64), scale, mu
@@ -285,18 +286,56 @@ def landen_sncndn(x, g, omg, inv_scale, mu):
     >>> bool(np.allclose(s**2 + c**2, 1.0, rtol=0, atol=4e-16))
     True
     """
-    v = x * inv_scale
+    s, c, d = landen_base(x * inv_scale, mu)
+    for lev in range(g.shape[0] - 1, -1, -1):
+        s, c, d = landen_ascend(s, c, d, g[lev], omg[lev])
+    return s, c, d
+
+
+# The three formulas of the chain, each once, in numpy's ufuncs on floats or arrays: numba
+# compiles them on floats for the scalar kernels (attitude.propagation.compiled._landen).
+def landen_base(v, mu):
+    """``sn, cn, dn (v | mu)`` at the base of the chain, ``mu < MU_BASE_MAX``: the
+    expansion about ``m = 0`` to ``O(mu)`` (A&S 16.13.1-3).
+
+    Examples
+    --------
+    >>> [round(float(f), 12) for f in landen_base(0.5, 0.0)]     # sin, cos, 1
+    [0.479425538604, 0.87758256189, 1.0]
+    """
     s0 = np.sin(v)
     c0 = np.cos(v)
     corr = (0.25 * mu) * (v - s0 * c0)
-    s = s0 - corr * c0
-    c = c0 + corr * s0
-    d = 1.0 - (0.5 * mu) * (s0 * s0)
-    for lev in range(g.shape[0] - 1, -1, -1):
-        gl = g[lev]
-        inv_d = 1.0 / (1.0 + gl * (s * s))
-        s, c, d = ((1.0 + gl) * inv_d) * s, (c * d) * inv_d, (omg[lev] + gl * (c * c)) * inv_d
-    return s, c, d
+    return s0 - corr * c0, c0 + corr * s0, 1.0 - (0.5 * mu) * (s0 * s0)
+
+
+def landen_descend(kp, omk):
+    """One level down the chain: ``k'`` and ``1 - k'`` of the next (smaller) parameter
+    from those of a level, ``k'_{i+1} = 2 sqrt(k') / (1 + k')`` and
+    ``1 - k'_{i+1} = (1 - sqrt k')^2 / (1 + k')`` with ``1 - sqrt k' = (1 - k') / (1 +
+    sqrt k')`` (no cancellation).
+
+    Examples
+    --------
+    >>> [float(x) for x in landen_descend(0.25, 0.75)]
+    [0.8, 0.2]
+    """
+    sq = np.sqrt(kp)
+    return 2.0 * sq / (1.0 + kp), (omk / (1.0 + sq)) ** 2 / (1.0 + kp)
+
+
+def landen_ascend(s, c, d, g, omg):
+    """One level up the chain: ``sn, cn, dn`` of a level from those ``s, c, d`` of the
+    next (smaller) parameter at the argument divided by ``1 + g`` (A&S 16.12.2-4, each
+    without cancellation; ``omg = 1 - g``, formed without it).
+
+    Examples
+    --------
+    >>> landen_ascend(0.0, 1.0, 1.0, 0.25, 0.75)                  # u = 0
+    (0.0, 1.0, 1.0)
+    """
+    inv_d = 1.0 / (1.0 + g * (s * s))
+    return ((1.0 + g) * inv_d) * s, (c * d) * inv_d, (omg + g * (c * c)) * inv_d
 
 
 # --------------------------------------------------------------------------

@@ -36,6 +36,7 @@ __all__ = [
     "jacobi_parameters",
     "characteristic",
     "half_theta",
+    "half_angles",
     "euler313_quaternion",
 ]
 
@@ -236,20 +237,30 @@ def half_theta(L1, L2, L3):
     [0.707106781186548, 0.707106781186548]
     """
     if isinstance(L3, float) and isinstance(L1, float) and isinstance(L2, float):
-        rho = math.hypot(L1, L2)
-        Lt = math.hypot(rho, L3)
-        if Lt == 0.0:
+        if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
             return math.nan, math.nan
-        h = math.sqrt((Lt + abs(L3)) / (2.0 * Lt))
-        o = rho / (2.0 * Lt * h)
+        h, o = (float(x) for x in half_angles(L1, L2, L3))
         return (h, o) if L3 >= 0 else (o, h)
-    rho = np.hypot(L1, L2)
-    Lt = np.hypot(rho, L3)
     with np.errstate(invalid="ignore", divide="ignore"):
-        h = np.sqrt((Lt + np.abs(L3)) / (2.0 * Lt))
-        o = rho / (2.0 * Lt * h)
+        h, o = half_angles(L1, L2, L3)
     pos = L3 >= 0
     return np.where(pos, h, o), np.where(pos, o, h)
+
+
+def half_angles(L1, L2, L3):
+    """The larger and the smaller of ``cos(theta/2), sin(theta/2)`` (:func:`half_theta`,
+    whose one source this is: in numpy's ufuncs on floats or arrays, which numba
+    compiles on floats for the kernels of :mod:`attitude.propagation.compiled`).
+
+    Examples
+    --------
+    >>> [round(float(x), 15) for x in half_angles(0.0, 1.0, 1.0)]     # theta = 45 deg
+    [0.923879532511287, 0.38268343236509]
+    """
+    rho = np.hypot(L1, L2)
+    Lt = np.hypot(rho, L3)
+    h = np.sqrt((Lt + np.abs(L3)) / (2.0 * Lt))
+    return h, rho / (2.0 * Lt * h)
 
 
 def euler313_quaternion(ct, st, phi, psi):

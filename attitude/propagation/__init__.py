@@ -8,7 +8,9 @@ it, one module each:
   algebra) and :mod:`attitude.foundations.elliptic` (Landen transformations, Bulirsch's ``cel``,
   double-double arithmetic);
 - :mod:`.splitting`: the splitting integrator with torques (exact free flow composed with
-  torque kicks, orders 2, 4 and 6);
+  torque kicks, orders 2, 4 and 6), on :mod:`.freeflow` (the exact free flow over one
+  step), :mod:`.schemes` (the compositions), :mod:`.kicks` (bodies, torques, kicks) and
+  :mod:`.stepsize` (the default step);
 - :mod:`.reference`: the DOP853 reference integrator of Euler's equations (scipy's, or
   the same method compiled: :mod:`.compiled_dop853`);
 - :mod:`.compiled`, :mod:`.compiled_torques`, :mod:`.compiled_loop`: the numba kernels

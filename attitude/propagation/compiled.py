@@ -53,11 +53,15 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import numpy as np
+
+from ..foundations import elliptic as el
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
 __all__ = ["NUMBA", "jit", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
-           "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one"]
+           "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one",
+           "free_flow_bodies", "free_step"]
 
 #: Unit roundoff of float64 (half the spacing of 1.0): the AGM's stopping test (Cephes'
 #: MACHEP) and Carlson's ``r``.
@@ -85,10 +89,15 @@ def _numba():
 #: cached code of all of them when any of :data:`KERNEL_SOURCES` changes.
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "compiled_dop853.py")
-#: The sources compiled into the kernels: theirs and the Kepler solver of
-#: :mod:`attitude.model.orbit` (compiled by :mod:`.compiled_torques`; numba keeps that one's
-#: own cache fresh, not the callers').
-KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py",)
+#: The sources compiled into the kernels: theirs, the Kepler solver of
+#: :mod:`attitude.model.orbit` and the shadow test of :mod:`attitude.model.shadow` (compiled
+#: by :mod:`.compiled_torques`), the free-body, quaternion and Landen helpers (compiled by
+#: this module); numba keeps those functions' own caches fresh, not the callers'.
+KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py", "../model/shadow.py",
+                                   "../model/freebody_algebra.py",
+                                   "../model/freebody_constants.py",
+                                   "../foundations/quaternion.py",
+                                   "../foundations/elliptic.py")
 
 
 def _drop_stale_cache() -> None:
@@ -98,8 +107,10 @@ def _drop_stale_cache() -> None:
     here = Path(__file__).parent
     folder = here / "__pycache__"
     try:
-        digest = hashlib.sha1(b"".join((here / name).read_bytes()
-                                       for name in KERNEL_SOURCES)).hexdigest()
+        # a source that moved away counts by its name (the stamp still changes)
+        digest = hashlib.sha1(b"".join((here / name).read_bytes() if (here / name).is_file()
+                                       else name.encode() for name in KERNEL_SOURCES)
+                              ).hexdigest()
         stamp = folder / "attitude-kernels.sha1"
         if stamp.is_file() and stamp.read_text() == digest:
             return
@@ -355,28 +366,28 @@ def _amplitude(a, b, c, twon, u):
 _MU_BASE = 1e-10
 
 
+# the base level and the steps of the chain: attitude.foundations.elliptic's, compiled
+_landen_base = jit(el.landen_base)
+_landen_ascend = jit(el.landen_ascend)
+_landen_descend = jit(el.landen_descend)
+
+
 @jit
 def _landen(x, kp, omk):
     """``sn, cn, dn (x | m)`` for ``m = 1 - kp^2``, ``omk = 1 - kp`` (formed without
     cancellation), by the descending Landen transformation (A&S 16.12.2-4), each level
     without cancellation (``dn = ((1 - g) + g c^2) / (1 + g s^2)``); recursive, one
-    level per call (attitude.elliptic.landen_sncndn, in scalar float64)."""
+    level per call (attitude.foundations.elliptic.landen_sncndn, in scalar float64, on
+    its base level and step)."""
     g = omk / (1.0 + kp)
     omg = 2.0 * kp / (1.0 + kp)
     xs = x / (1.0 + g)
     mu = g * g
     if mu < _MU_BASE:
-        s0 = math.sin(xs)
-        c0 = math.cos(xs)
-        corr = (0.25 * mu) * (xs - s0 * c0)
-        s = s0 - corr * c0
-        c = c0 + corr * s0
-        d = 1.0 - (0.5 * mu) * (s0 * s0)
+        s, c, d = _landen_base(xs, mu)
     else:
-        sq = math.sqrt(kp)
-        s, c, d = _landen(xs, 2.0 * sq / (1.0 + kp), (omk / (1.0 + sq)) ** 2 / (1.0 + kp))
-    inv = 1.0 / (1.0 + g * (s * s))
-    return (1.0 + g) * inv * s, c * d * inv, (omg + g * (c * c)) * inv
+        s, c, d = _landen(xs, *_landen_descend(kp, omk))
+    return _landen_ascend(s, c, d, g, omg)
 
 
 @jit
@@ -394,9 +405,7 @@ def _ellipj_near1(u, m, m1):
         scale *= 1.0 + g
         if g * g < _MU_BASE:
             break
-        sq = math.sqrt(k)
-        o = (o / (1.0 + sq)) ** 2 / (1.0 + k)
-        k = 2.0 * sq / (1.0 + k)
+        k, o = _landen_descend(k, o)
     mu = g * g
     K = scale * (math.pi / 2.0) * (1.0 + mu / 4.0 + 9.0 * mu * mu / 64.0)
     n = math.floor(u / (2.0 * K) + 0.5)
@@ -595,18 +604,33 @@ def elliprj(x, y, z, p):
 
 
 # ===========================================================================
-# the exact free flow of one body over one step (splitting._free_flow1)
+# the exact free flow over one step: one source (free_step), compiled and as numpy
 # ===========================================================================
-# The freebody helpers that are pure arithmetic on their arguments compile as they are.
-# The others take a scalar fast path chosen by ``isinstance`` (or call a helper that is
-# not compiled), which numba does not type: their float branches are repeated below,
-# operation for operation, so that both paths round alike (tests/test_compiled.py
-# compares each twin with its original).
+# The formulas of the free flow are written once, in free_step, in arithmetic that runs
+# on plain floats and on numpy arrays alike (numpy's ufuncs, which numba compiles on
+# floats).  Where the scalar and the array code must differ, free_step calls one of the
+# primitives bound here: a branch (``_select``, ``_any``), a special function, or a
+# freebody helper whose float branch numba cannot type.  With numba they are the scalar
+# kernels of this module, and free_step is compiled for one body (free_flow_one, and
+# free_flow_bodies over a batch: a compiled loop, faster than numpy's passes over the
+# arrays); without numba, numpy's and scipy's, and free_step is the vectorised numpy
+# path of attitude.propagation.freeflow (a Python loop over the bodies would be ~100x
+# slower).  So each formula has one source, and both paths round alike (the tests
+# compare them to a few ulp).
+#: scipy.special.ellipj (Cephes) switches to its expansion about m = 1 from this m on; the
+#: expansion fails past the first quarter period (sn > 1, cn ~ -3e5 at u = 40,
+#: m = 1 - 1e-11), so the numpy path takes :func:`ellipj` there (Landen from 1 - m).
+CEPHES_NEAR1 = 0.9999999999
+_PURE_SPIN_TOL = fb.PURE_SPIN_TOL_UNSCALED
+# the freebody and quaternion helpers that numba compiles as they are (their float
+# branch chosen by isinstance); without numba, jit returns them unchanged
 _separatrix_gap = jit(fb.separatrix_gap)
 _jacobi_parameters = jit(fb.jacobi_parameters)
+_kernel_moments = jit(fb.kernel_moments)
+_kernel_vector = jit(fb.kernel_vector)
+_euler313_quaternion = jit(fb.euler313_quaternion)
 _multiply_parts = jit(quat.multiply_parts)
 _conjugate_parts = jit(quat.conjugate_parts)
-_PURE_SPIN_TOL = fb.PURE_SPIN_TOL_UNSCALED
 
 
 @jit
@@ -621,47 +645,18 @@ def _invariants(I1, I2, I3, w1, w2, w3):
     return d21, d32, d31, Q1, Q3, D, L2
 
 
-@jit
-def _kernel_moments(A, B, C, lam):
-    """fb.kernel_moments, bool branch."""
-    if lam:
-        return C, B, A
-    return A, B, C
-
-
-@jit
-def _kernel_vector(x1, x2, x3, lam):
-    """fb.kernel_vector, bool branch."""
-    if lam:
-        return x3, -x2, x1
-    return x1, x2, x3
+_half_angles = jit(fb.half_angles)
 
 
 @jit
 def _half_theta(L1, L2, L3):
-    """fb.half_theta, float branch."""
-    rho = math.hypot(L1, L2)
-    Lt = math.hypot(rho, L3)
-    if Lt == 0.0:
+    """fb.half_theta, float branch (its formulas: fb.half_angles, compiled)."""
+    if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
         return math.nan, math.nan
-    h = math.sqrt((Lt + abs(L3)) / (2.0 * Lt))
-    o = rho / (2.0 * Lt * h)
+    h, o = _half_angles(L1, L2, L3)
     if L3 >= 0:
         return h, o
     return o, h
-
-
-@jit
-def _euler313_quaternion(ct, st, phi, psi):
-    """fb.euler313_quaternion, float branch."""
-    hp = 0.5 * (phi + psi)
-    hm = 0.5 * (phi - psi)
-    return st * math.cos(hm), st * math.sin(hm), ct * math.sin(hp), ct * math.cos(hp)
-
-
-@jit
-def _clip(x, lo, hi):
-    return lo if x < lo else (hi if x > hi else x)
 
 
 @jit
@@ -675,8 +670,185 @@ def _round_half_even(x):
 
 
 @jit
+def _select_scalar(c, a, b):
+    return a if c else b
+
+
+@jit
+def _any_scalar(c):
+    return c
+
+
+def _ellipj_numpy(u, m):
+    """``sn, cn, dn`` by scipy.special.ellipj, by :func:`ellipj` from ``m >= CEPHES_NEAR1``
+    on (module notes)."""
+    from scipy import special as sp  # costly: only the numpy path (numba absent) needs it
+
+    sn, cn, dn, _ = sp.ellipj(u, m)
+    near = np.atleast_1d(m >= CEPHES_NEAR1)
+    if near.any():
+        sn, cn, dn = np.atleast_1d(sn).copy(), np.atleast_1d(cn).copy(), np.atleast_1d(dn).copy()
+        uu = np.broadcast_to(np.atleast_1d(u), near.shape)
+        mm = np.broadcast_to(np.atleast_1d(m), near.shape)
+        for i in np.flatnonzero(near):
+            sn[i], cn[i], dn[i] = ellipj(float(uu[i]), float(mm[i]))
+        if np.ndim(u) == 0 and np.ndim(m) == 0:
+            sn, cn, dn = sn[0], cn[0], dn[0]
+    return sn, cn, dn
+
+
+if NUMBA:
+    _select, _any, _rint = _select_scalar, _any_scalar, _round_half_even
+    _ellipj, _elliprf, _elliprj = ellipj, elliprf, elliprj
+    _half_theta_any, _invariants_any = _half_theta, _invariants
+else:
+    def _elliprf(x, y, z):
+        from scipy import special as sp  # costly: only the numpy path needs it
+
+        return sp.elliprf(x, y, z)
+
+    def _elliprj(x, y, z, p):
+        from scipy import special as sp  # costly: only the numpy path needs it
+
+        return sp.elliprj(x, y, z, p)
+
+    def _select(c, a, b):
+        """np.where, or a branch on one body's flag (no 0-d array: ~5x faster)."""
+        if isinstance(c, (bool, np.bool_)):
+            return a if c else b
+        return np.where(c, a, b)
+
+    def _any(c):
+        return bool(c) if isinstance(c, (bool, np.bool_)) else bool(c.any())
+
+    _rint = np.rint
+    _ellipj = _ellipj_numpy
+    _half_theta_any, _invariants_any = fb.half_theta, fb.invariants
+
+
+@jit
+def free_step(A, B, C, spherical, lam_on_tie, nu_sam, nu_lam, o1, o2, o3, h):
+    """The step of the exact free flow over ``h``: the rotation ``g`` it applies in
+    principal axes (``q(t + h) = q(t) g``) and the new principal rates.
+
+    One body (floats; compiled with numba) or many (arrays of one shape; numpy): the
+    single source of the free flow (the module notes above).  The formulas and their
+    numbering (S1-S5) are those of :func:`attitude.propagation.freeflow.free_flow`.
+
+    Parameters
+    ----------
+    A, B, C : float or array
+        Principal moments scaled by a power of two (:class:`~attitude.propagation.
+        freeflow.FreeConstants`).
+    spherical, lam_on_tie : bool or bool array
+        Rotation is uniform; the kernel frame on the separatrix is the LAM one.
+    nu_sam, nu_lam : float or array
+        The characteristic ``nu`` of both kernel frames.
+    o1, o2, o3 : float or array
+        Principal-frame rates, rad/s.
+    h : float or array
+        Interval, s (any sign).
+
+    Returns
+    -------
+    gx, gy, gz, gw, p1, p2, p3
+        The rotation's quaternion components (scalar last, unit to round-off) and the
+        rates at ``t + h``.
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled import free_step
+    >>> g = free_step(0.25, 0.5, 0.75, False, False, 3.0, 1 / 3, 0.0, 0.0, 1.0, 0.5)
+    >>> [round(float(x), 12) for x in g]     # pure spin about C: half a radian about z
+    [0.0, 0.0, 0.247403959255, 0.968912421711, 0.0, 0.0, 1.0]
+    """
+    # kernel frame: SAM (A, B, C), or LAM (C, B, A) along (e3, -e2, e1)          (S1)
+    delta = _separatrix_gap(A, B, C, o1, o3)                            # L^2 - 2EB
+    lam = np.logical_or(delta < 0, np.logical_and(delta == 0, lam_on_tie))
+    I1, I2, I3 = _kernel_moments(A, B, C, lam)
+    w1, w2, w3 = _kernel_vector(o1, o2, o3, lam)
+    nu = _select(lam, nu_lam, nu_sam)
+    d21, d32, d31, Q1, Q3, Dk, Lsq = _invariants_any(I1, I2, I3, w1, w2, w3)
+    L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
+    L = np.sqrt(Lsq)
+    m, m1, lam2 = _jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
+    m = np.minimum(np.maximum(m, 0.0), 1.0)
+    m1 = np.minimum(np.maximum(m1, 0.0), 1.0)
+    # u = u0 + lambda t with dn(u) = w3 / a3 > 0: lambda has the sign of w3 (I3 - I2)
+    s = _select(w3 < 0, -1.0, 1.0)
+    lamb = _select(lam, -s, s) * np.sqrt(lam2)
+    v = lamb * h
+    sn, cn, dn = _ellipj(v, m)
+    snl = sn / lamb
+    # rates by the addition theorems, no amplitude in a denominator              (S2)
+    D = 1.0 - (I2 * d21 / Q3) * (w2 * w2) * (sn * sn)
+    n1 = (w1 * cn - (d32 / I1) * w2 * w3 * snl * dn) / D
+    n2 = (w2 * cn * dn + (d31 / I2) * w1 * w3 * snl) / D
+    n3 = (w3 * dn - (d21 / I3) * w1 * w2 * snl * cn) / D
+    # precession angle about L                                                   (S3)
+    a1 = np.sqrt(Q1 / (I1 * d31))
+    a2 = np.sqrt(Q1 / (I2 * d32))
+    a3 = s * np.sqrt(Q3 / (I3 * d31))
+    sn0 = np.minimum(np.maximum(w2 / a2, -1.0), 1.0)
+    cn0 = np.minimum(np.maximum(w1 / a1, -1.0), 1.0)
+    dn0 = np.minimum(w3 / a3, 1.0)
+    sn1 = np.minimum(np.maximum(n2 / a2, -1.0), 1.0)
+    cn1 = np.minimum(np.maximum(n1 / a1, -1.0), 1.0)
+    dn1 = np.minimum(n3 / a3, 1.0)
+    nu3 = nu / 3.0
+    S0 = nu3 * sn0 ** 3 * _elliprj(cn0 * cn0, dn0 * dn0, 1.0, 1.0 + nu * sn0 * sn0)
+    S1 = nu3 * sn1 ** 3 * _elliprj(cn1 * cn1, dn1 * dn1, 1.0, 1.0 + nu * sn1 * sn1)
+    S0 = _select(nu == 0, 0.0, S0)
+    S1 = _select(nu == 0, 0.0, S1)
+    p0 = cn0 >= 0                                     # parity of the half-period window
+    p1 = cn1 >= 0
+    dwin = _select(p0 == p1, 0.0, _select(v >= 0, 1.0, -1.0))
+    far = np.abs(v) >= math.pi                        # 2K >= pi: may span > 1 window
+    if _any(far):
+        K = _elliprf(0.0, m1, 1.0)
+        uh = sn0 * _elliprf(cn0 * cn0, dn0 * dn0, 1.0)
+        u0 = _select(p0, uh, np.copysign(2.0 * K, sn0) - uh)
+        general = _rint((u0 + v) / (2.0 * K)) - _rint(u0 / (2.0 * K))
+        dwin = _select(np.logical_and(far, m1 > 0), general, dwin)
+    dJ = _select(p1, S1, -S1) - _select(p0, S0, -S0)
+    if _any(dwin != 0):
+        JK = nu3 * _elliprj(0.0, m1, 1.0, 1.0 + nu)
+        dJ = dJ + _select(dwin == 0, 0.0, 2.0 * dwin * JK)
+    c1 = L * d31 / (I1 * I3)
+    dphi = h * (L / I3 + c1) - c1 * dJ / lamb
+    # attitude: q(t+h) = q(t) E0^-1 E1, E = Rz(phi) Rx(theta) Rz(psi)           (S4)
+    ct0, st0 = _half_theta_any(L1, L2, L3)
+    M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
+    ct1, st1 = _half_theta_any(M1, M2, M3)
+    e = _euler313_quaternion(ct0, st0, 0.0, np.arctan2(L1, L2))
+    f = _euler313_quaternion(ct1, st1, dphi, np.arctan2(M1, M2))
+    gx, gy, gz, gw = _multiply_parts(_conjugate_parts(e), f)
+    gx, gy, gz = _kernel_vector(gx, gy, gz, lam)          # the step in principal axes
+    p1_, p2_, p3_ = _kernel_vector(n1, n2, n3, lam)
+    # uniform rotation: spherical body, principal-axis spin, rest, lambda = 0     (S5)
+    aL1, aL2, aL3 = np.abs(L1), np.abs(L2), np.abs(L3)
+    mid = np.maximum(np.minimum(aL1, aL2), np.minimum(np.maximum(aL1, aL2), aL3))
+    uniform = np.logical_or(
+        np.logical_or(spherical, mid <= _PURE_SPIN_TOL * L),
+        np.logical_not(np.logical_and(lam2 > 0, np.isfinite(gx + gy + gz + gw + p1_ + p2_
+                                                            + p3_))))
+    if _any(uniform):
+        wn = np.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
+        half = 0.5 * wn * h
+        sh = _select(wn > 0, np.sin(half) / wn, 0.0)
+        gx = _select(uniform, sh * o1, gx)
+        gy = _select(uniform, sh * o2, gy)
+        gz = _select(uniform, sh * o3, gz)
+        gw = _select(uniform, np.cos(half), gw)
+        p1_ = _select(uniform, o1, p1_)
+        p2_ = _select(uniform, o2, p2_)
+        p3_ = _select(uniform, o3, p3_)
+    return gx, gy, gz, gw, p1_, p2_, p3_
+
+
+@jit
 def _rotate_by(q, gx, gy, gz, gw):
-    """``q <- q g / |q g|`` in place (splitting._qmul1)."""
+    """``q <- q g / |q g|`` in place."""
     nx, ny, nz, nw = _multiply_parts((q[0], q[1], q[2], q[3]), (gx, gy, gz, gw))
     r = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
     q[0] = nx * r
@@ -686,17 +858,8 @@ def _rotate_by(q, gx, gy, gz, gw):
 
 
 @jit
-def _uniform(q, o1, o2, o3, h):
-    """Uniform rotation about ``omega`` (splitting._uniform1); ``w`` stays."""
-    wn = math.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
-    half = 0.5 * wn * h
-    sh = math.sin(half) / wn if wn > 0 else 0.0
-    _rotate_by(q, sh * o1, sh * o2, sh * o3, math.cos(half))
-
-
-@jit
 def free_flow_one(c, q, w, h):
-    """Exact torque-free motion of one body over ``h``, in place: ``splitting._free_flow1``.
+    """Exact torque-free motion of one body over ``h``, in place: :func:`free_step`.
 
     Parameters
     ----------
@@ -704,7 +867,7 @@ def free_flow_one(c, q, w, h):
         dtype compiles once more)
         ``[A, B, C, spherical, lam_on_tie, nu_sam, nu_lam]``: the moments scaled by a
         power of two and the flags (0 or 1) and characteristics of
-        ``splitting._FreeConstants`` (its ``row``).
+        :class:`attitude.propagation.freeflow.FreeConstants` (its ``row``).
     q : float64 array (4,)
         Principal -> inertial quaternion, scalar-last, unit; overwritten with ``q(t + h)``.
     w : float64 array (3,)
@@ -715,8 +878,9 @@ def free_flow_one(c, q, w, h):
     Notes
     -----
     The formulas and their numbering (S1-S5) are those of
-    :func:`attitude.propagation.splitting.free_flow`; the special functions are
-    :func:`ellipj`, :func:`elliprf` and :func:`elliprj` of this module.
+    :func:`attitude.propagation.freeflow.free_flow`; the special functions are
+    :func:`ellipj`, :func:`elliprf` and :func:`elliprj` of this module (scipy's without
+    numba).
 
     Examples
     --------
@@ -729,77 +893,45 @@ def free_flow_one(c, q, w, h):
     >>> bool(np.allclose(q, qr, rtol=0, atol=1e-15) and np.allclose(w, wr, rtol=0, atol=1e-15))
     True
     """
-    A, B, C = c[0], c[1], c[2]
-    o1, o2, o3 = w[0], w[1], w[2]
-    if c[3] != 0.0:                                   # spherical                  (S5)
-        _uniform(q, o1, o2, o3, h)
-        return
-    delta = _separatrix_gap(A, B, C, o1, o3)
-    lam = delta < 0 or (delta == 0 and c[4] != 0.0)  # kernel frame                (S1)
-    I1, I2, I3 = _kernel_moments(A, B, C, lam)
-    w1, w2, w3 = _kernel_vector(o1, o2, o3, lam)
-    nu = c[6] if lam else c[5]
-    d21, d32, d31, Q1, Q3, Dk, Lsq = _invariants(I1, I2, I3, w1, w2, w3)
-    L1, L2, L3 = I1 * w1, I2 * w2, I3 * w3
-    L = math.sqrt(Lsq)
-    a_, b_, c_ = abs(L1), abs(L2), abs(L3)
-    mid = max(min(a_, b_), min(max(a_, b_), c_))
-    w2s = w2 * w2
-    if mid <= _PURE_SPIN_TOL * L or not d32 * Q3 > 0:
-        _uniform(q, o1, o2, o3, h)
-        return
-    m, m1, lam2 = _jacobi_parameters(I1, I2, I3, d21, d32, d31, Q1, Q3, Dk)
-    m = _clip(m, 0.0, 1.0)
-    m1 = _clip(m1, 0.0, 1.0)
-    s = -1.0 if w3 < 0 else 1.0
-    lamb = (-s if lam else s) * math.sqrt(lam2)
-    v = lamb * h
-    sn, cn, dn = ellipj(v, m)
-    snl = sn / lamb
-    D = 1.0 - (I2 * d21 / Q3) * w2s * (sn * sn)     # addition theorems            (S2)
-    n1 = (w1 * cn - (d32 / I1) * w2 * w3 * snl * dn) / D
-    n2 = (w2 * cn * dn + (d31 / I2) * w1 * w3 * snl) / D
-    n3 = (w3 * dn - (d21 / I3) * w1 * w2 * snl * cn) / D
-    a1 = math.sqrt(Q1 / (I1 * d31))                  # precession angle            (S3)
-    a2 = math.sqrt(Q1 / (I2 * d32))
-    a3 = s * math.sqrt(Q3 / (I3 * d31))
-    sn0 = _clip(w2 / a2, -1.0, 1.0)
-    cn0 = _clip(w1 / a1, -1.0, 1.0)
-    dn0 = min(w3 / a3, 1.0)
-    sn1 = _clip(n2 / a2, -1.0, 1.0)
-    cn1 = _clip(n1 / a1, -1.0, 1.0)
-    dn1 = min(n3 / a3, 1.0)
-    if nu == 0:
-        S0 = 0.0
-        S1 = 0.0
-    else:
-        nu3 = nu / 3.0
-        S0 = nu3 * sn0 ** 3 * elliprj(cn0 * cn0, dn0 * dn0, 1.0, 1.0 + nu * sn0 * sn0)
-        S1 = nu3 * sn1 ** 3 * elliprj(cn1 * cn1, dn1 * dn1, 1.0, 1.0 + nu * sn1 * sn1)
-    p0, p1 = cn0 >= 0, cn1 >= 0
-    dwin = 0.0 if p0 == p1 else (1.0 if v >= 0 else -1.0)
-    if abs(v) >= math.pi and m1 > 0:
-        K = elliprf(0.0, m1, 1.0)
-        uh = sn0 * elliprf(cn0 * cn0, dn0 * dn0, 1.0)
-        u0 = uh if p0 else math.copysign(2.0 * K, sn0) - uh
-        dwin = _round_half_even((u0 + v) / (2.0 * K)) - _round_half_even(u0 / (2.0 * K))
-    dJ = (S1 if p1 else -S1) - (S0 if p0 else -S0)
-    if dwin != 0:
-        dJ += 2.0 * dwin * (nu / 3.0) * elliprj(0.0, m1, 1.0, 1.0 + nu)
-    c1 = L * d31 / (I1 * I3)
-    dphi = h * (L / I3 + c1) - c1 * dJ / lamb
-    ct0, st0 = _half_theta(L1, L2, L3)               # attitude                    (S4)
-    M1, M2, M3 = I1 * n1, I2 * n2, I3 * n3
-    ct1, st1 = _half_theta(M1, M2, M3)
-    e = _euler313_quaternion(ct0, st0, 0.0, math.atan2(L1, L2))
-    f = _euler313_quaternion(ct1, st1, dphi, math.atan2(M1, M2))
-    gx, gy, gz, gw = _multiply_parts(_conjugate_parts(e), f)
-    gx, gy, gz = _kernel_vector(gx, gy, gz, lam)     # the step in principal axes
-    p1_, p2_, p3_ = _kernel_vector(n1, n2, n3, lam)
-    if not math.isfinite(gx + gy + gz + gw + p1_ + p2_ + p3_):
-        _uniform(q, o1, o2, o3, h)
-        return
+    gx, gy, gz, gw, p1, p2, p3 = free_step(c[0], c[1], c[2], c[3] != 0.0, c[4] != 0.0,
+                                           c[5], c[6], w[0], w[1], w[2], h)
     _rotate_by(q, gx, gy, gz, gw)
-    w[0] = p1_
-    w[1] = p2_
-    w[2] = p3_
+    w[0] = p1
+    w[1] = p2
+    w[2] = p3
+
+
+if not NUMBA:
+    def _quietly(function):
+        """``function`` under ``np.errstate(all="ignore")``: as plain Python, free_step
+        divides by zero and takes square roots of negatives where numba (its numpy error
+        model) does so silently, in the branches that the selections then discard."""
+        @functools.wraps(function)
+        def quiet(*args):
+            with np.errstate(all="ignore"):
+                return function(*args)
+        return quiet
+
+    free_step, free_flow_one = _quietly(free_step), _quietly(free_flow_one)
+
+
+@jit
+def free_flow_bodies(c, q, w, h):
+    """:func:`free_flow_one` of each body of a batch, in place: ``c`` (N, 7) rows of
+    constants, ``q`` (N, 4), ``w`` (N, 3), ``h`` (N,) intervals (the compiled
+    vectorised free flow).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.compiled import free_flow_bodies, free_flow_one
+    >>> c = np.array([[0.25, 0.5, 0.75, 0, 0, 3.0, 1 / 3]] * 2)
+    >>> q, w = np.array([[0, 0, 0, 1.0]] * 2), np.array([[0.1, 0.2, 1.0]] * 2)
+    >>> free_flow_bodies(c, q, w, np.array([2.5, -2.5]))           # each body its own h
+    >>> q1, w1 = np.array([0, 0, 0, 1.0]), np.array([0.1, 0.2, 1.0])
+    >>> free_flow_one(c[1], q1, w1, -2.5)
+    >>> bool(np.array_equal(q[1], q1) and np.array_equal(w[1], w1))
+    True
+    """
+    for i in range(q.shape[0]):
+        free_flow_one(c[i], q[i], w[i], h[i])

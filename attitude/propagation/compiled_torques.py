@@ -67,6 +67,7 @@ import numpy as np
 from ..foundations.errors import InvalidStateError
 from ..model.body import RigidBody
 from ..model.orbit import solve_kepler_scalar
+from ..model.shadow import illumination_fraction
 from ..model.torques import TorqueModel
 from .compiled import NUMBA
 from .compiled import jit as _jit
@@ -168,33 +169,9 @@ def _velocity(params, i, t):
     return _piecewise_rate(params, i + 1, t)
 
 
-@_jit
-def _illumination(x, y, z, sx, sy, sz, model, earth_radius, sun_radius):
-    """Visible fraction of the solar disk (:func:`attitude.environment.illumination`,
-    one epoch, the same formulas): ``model`` 1 conical, 2 cylindrical."""
-    if model == 2.0:
-        d_sun = math.sqrt(sx * sx + sy * sy + sz * sz)
-        along = (x * sx + y * sy + z * sz) / d_sun
-        across2 = max(x * x + y * y + z * z - along * along, 0.0)
-        return 0.0 if (along < 0 and math.sqrt(across2) < earth_radius) else 1.0
-    tx, ty, tz = sx - x, sy - y, sz - z
-    d_sun = math.sqrt(tx * tx + ty * ty + tz * tz)
-    d_earth = math.sqrt(x * x + y * y + z * z)
-    a = math.asin(sun_radius / d_sun)
-    b = math.asin(min(max(earth_radius / d_earth, -1.0), 1.0))
-    cos_c = -(x * tx + y * ty + z * tz) / (d_earth * d_sun)
-    c = math.acos(min(max(cos_c, -1.0), 1.0))
-    if c >= a + b:
-        return 1.0
-    if c <= b - a:
-        return 0.0
-    if c <= a - b:
-        return 1.0 - (b * b) / (a * a)
-    u = (c * c + a * a - b * b) / (2 * c)
-    v = math.sqrt(max(a * a - u * u, 0.0))
-    lens = (a * a * math.acos(min(max(u / a, -1.0), 1.0))
-            + b * b * math.acos(min(max((c - u) / b, -1.0), 1.0)) - c * v)
-    return min(max(1.0 - lens / (math.pi * a * a), 0.0), 1.0)
+#: The shadow test of attitude.model.shadow (its one source), compiled: the model code 1
+#: is conical, 2 cylindrical.
+_illumination_fraction = _jit(illumination_fraction)
 
 
 @_jit
@@ -210,7 +187,8 @@ def _radiation(params, i, t, qx, qy, qz, qw):
     ratio = params[i + 2] / dist
     p = params[i + 1] * (ratio * ratio)
     if params[i + 3] != 0.0:
-        p *= _illumination(x, y, z, sx, sy, sz, params[i + 3], params[i + 4], params[i + 5])
+        p *= _illumination_fraction(x, y, z, sx, sy, sz, params[i + 3] != 2.0,
+                                    params[i + 4], params[i + 5])
     if p == 0.0:
         return 0.0, 0.0, 0.0
     s0, s1, s2 = _to_body(qx, qy, qz, qw, dx / dist, dy / dist, dz / dist)
