@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from attitude.app.cli import _check_one, _check_targets
+from attitude.app.commands.check import _check_one, _check_targets
 from attitude.app.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
