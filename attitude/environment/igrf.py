@@ -154,10 +154,7 @@ class IGRF:
         >>> field.compiled_parameters((0.0, 60.0))[0]
         'piecewise_cubic'
         """
-        if t_span is None:
-            return None
-        x, c = self._table.piecewise(*t_span)
-        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+        return self._table.compiled_parameters(t_span)
 
     def __call__(self, t) -> np.ndarray:
         """Field at the body at ``t`` (s after the epoch), inertial, T, ``t.shape + (3,)``."""

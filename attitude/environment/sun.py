@@ -83,10 +83,7 @@ class SunPath:
         >>> sun.compiled_parameters((0.0, 3600.0))[1]["breakpoints"].shape
         (49,)
         """
-        if t_span is None:
-            return None
-        x, c = self._table.piecewise(*t_span)
-        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+        return self._table.compiled_parameters(t_span)
 
     def position(self, t) -> np.ndarray:
         """Geocentric position of the Sun at ``t`` (s), inertial, m, ``t.shape + (3,)``."""

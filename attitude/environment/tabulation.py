@@ -97,6 +97,27 @@ class TimeTable:
         x = np.concatenate([s.x[:-1] for s in splines] + [splines[-1].x[-1:]])
         return x, np.concatenate([s.c for s in splines], axis=1)
 
+    def compiled_parameters(self, t_span) -> tuple[str, dict] | None:
+        """``("piecewise_cubic", {breakpoints, coefficients})``: the table over
+        ``t_span = (t0, t1)`` as :meth:`piecewise` gives it, the form a compiled kernel
+        reads for every tabulated path and field; None without a span.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> table = TimeTable(lambda t: np.stack([t, t * t], axis=-1), spacing=10.0,
+        ...                   segment=40.0)
+        >>> kind, values = table.compiled_parameters((5.0, 50.0))
+        >>> kind, values["breakpoints"].shape, values["coefficients"].shape
+        ('piecewise_cubic', (9,), (4, 8, 2))
+        >>> table.compiled_parameters(None) is None
+        True
+        """
+        if t_span is None:
+            return None
+        x, c = self.piecewise(*t_span)
+        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+
     def _horner(self, k: int, x: float, nu: int) -> np.ndarray:
         """The spline of segment ``k`` (or its derivative) at one time: the cubic of the
         node interval by Horner's rule (scipy's ``PPoly.__call__`` costs ~20 us)."""

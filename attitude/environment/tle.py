@@ -164,10 +164,7 @@ class TLEOrbit:
         >>> kind, values["coefficients"].shape
         ('piecewise_cubic', (4, 4320, 3))
         """
-        if t_span is None:
-            return None
-        x, c = self._table.piecewise(*t_span)
-        return ("piecewise_cubic", {"breakpoints": x, "coefficients": c})
+        return self._table.compiled_parameters(t_span)
 
     def position(self, t) -> np.ndarray:
         """Position relative to the Earth's centre, inertial, m; shape ``t.shape + (3,)``."""
