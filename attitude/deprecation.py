@@ -18,7 +18,7 @@ Examples
 ...     warnings.simplefilter("always")
 ...     f = old.free_flow
 >>> f.__module__, caught[0].category.__name__
-('attitude.propagation.splitting', 'DeprecationWarning')
+('attitude.propagation.freeflow', 'DeprecationWarning')
 >>> print(caught[0].message)
 attitude.splitting is deprecated; use attitude.propagation.splitting.free_flow
 """

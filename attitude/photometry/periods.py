@@ -287,13 +287,16 @@ def fit_periods(times, magnitudes, sigma=None, n_periods: int = 2, order: int = 
     Examples
     --------
     A double-peaked 6 h lightcurve: the periodogram's strongest frequency is 2/(6 h),
-    and the double-peaked period is reported.
+    and the double-peaked period is reported.  (The times are irregular and the curve
+    has a third harmonic, so that neither an alias of an even sampling nor 12 h, whose
+    harmonics 2 and 4 would repeat a curve of harmonics 1 and 2 of 6 h, fits as well.)
 
     >>> import numpy as np
     >>> from attitude.photometry.periods import fit_periods
-    >>> t = np.linspace(0, 3 * 86400.0, 600)
+    >>> t = np.sort(np.random.default_rng(1).uniform(0, 3 * 86400.0, 600))
     >>> f = 1 / (6 * 3600.0)
-    >>> m = 0.4 * np.cos(4 * np.pi * f * t) + 0.05 * np.cos(2 * np.pi * f * t + 1)
+    >>> m = (0.4 * np.cos(4 * np.pi * f * t) + 0.05 * np.cos(2 * np.pi * f * t + 1)
+    ...      + 0.03 * np.cos(6 * np.pi * f * t + 2))
     >>> fit = fit_periods(t, m, n_periods=1, order=4)
     >>> round(float(fit.periods[0]) / 3600, 4), round(fit.lightcurve_period / 3600, 4)
     (6.0, 6.0)
