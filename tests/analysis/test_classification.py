@@ -230,6 +230,7 @@ def dissipating():
     return body, eph
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_dissipation_sequence(dissipating):
     """Issue 5: PA-long -> LAM -> separatrix -> SAM -> PA-short, in that order, with the
     epochs where it changes; the LAM/SAM epoch is where E crosses L^2/2B."""
@@ -336,6 +337,7 @@ def test_lyapunov_control_of_a_torque_free_run_is_not_chaotic():
 # --- every propagator -----------------------------------------------------------------------
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_classify_numerical_propagators_agree_with_exact():
     from attitude.propagation.propagator import METHODS
 

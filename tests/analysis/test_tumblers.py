@@ -117,6 +117,7 @@ def _sphere_run(omega, tau_steps=100):
     return eph, t, tau
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_sphere_spin_down_follows_the_closed_form():
     eph, t, tau = _sphere_run([0.0, 0.0, 2.0])                # spin across the field
     trend = spin_trend(eph)

@@ -49,6 +49,7 @@ def test_every_figure_renders_non_trivially(tmp_path, name):
     _non_trivial(path)
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_regime_timeline_of_a_perturbed_run(tmp_path):
     eph = _eph([from_config({"type": "dissipation", "time_constant": "5 min"})])
     paths = plot.save_figures(eph, tmp_path / "diss", att.classify(eph, require_periods=False))

@@ -173,6 +173,7 @@ def test_shipped_apophis_ensemble_scenario_is_fast_and_passes():
     assert spread["0.9"] > 90
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_run_with_workers_on_a_local_cluster(tmp_path):
     pytest.importorskip("distributed")
     path = write(tmp_path, SAMPLED)

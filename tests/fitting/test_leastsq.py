@@ -223,6 +223,7 @@ def test_apophis_from_its_own_syntheticsynthetic_lightcurve():
     assert abs(res.chi2 - res.dof) < 5 * np.sqrt(2 * res.dof)
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_two_sigma_intervals_cover_the_truth_with_lightcurves():
     """12 random states (6 SAM, 6 LAM) seen as lightcurves of a triaxial ellipsoid
     (0.02 mag): >= 90 % of the (case, parameter) pairs inside 2 sigma.  L is kept more

@@ -437,6 +437,7 @@ def test_internal_dissipation_keeps_the_inertial_L_exactly(relaxation):
     assert dq.max() < 1e-8 and np.abs(w - wr).max() < 1e-8 * np.linalg.norm(w[0])
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_internal_kick_in_a_rotated_body_frame_batch_and_with_an_external_torque():
     """Body axes not principal, one-body (plain floats) and batch (arrays) paths, alone
     and with gravity gradient: against DOP853 (rtol 1e-13); the inertial L is kept when

@@ -274,6 +274,7 @@ def test_time_reversible_with_a_time_dependent_torque():
 # --- batches, outputs ---------------------------------------------------------------------
 
 
+@pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_batch_equals_single_runs():
     """One vectorised run of 5 bodies (rotated frames, an oblate one, gravity gradient +
     dissipation) equals 5 one-body runs (plain-float path) with the same step."""
