@@ -257,6 +257,16 @@ def test_the_layer_rule_catches_a_bad_import():
     ]
 
 
+#: The longest a module may grow: one concept per module (issue 25).
+MAX_MODULE_LINES = 1000
+
+
+def test_no_module_over_the_line_limit():
+    long = {name: n for name, path in _modules()
+            if (n := len(path.read_text().splitlines())) > MAX_MODULE_LINES}
+    assert not long, f"modules over {MAX_MODULE_LINES} lines (split by concept): {long}"
+
+
 def test_every_module_is_in_a_layer():
     for module in GRAPH:
         layer_of(module)          # raises naming the module
