@@ -240,7 +240,7 @@ def test_pure_python_fallback_in_a_subprocess():
     """With ``ATTITUDE_NO_NUMBA=1`` nothing is compiled and the same checks pass."""
     code = ("import attitude.propagation.compiled_torques as ct; assert not ct.NUMBA; "
             "import tests.propagation.test_compiled_torques as t; t.check_all()")
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     env = {**os.environ, "ATTITUDE_NO_NUMBA": "1",
            "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
     run = subprocess.run([sys.executable, "-c", code], env=env, cwd=root,
