@@ -27,6 +27,7 @@ import sys
 from .deprecation import MOVED_MODULES, install
 from .foundations.errors import *  # noqa: F403  (every exception and warning: errors.__all__)
 from .foundations.errors import __all__ as _error_names
+from .foundations.lazy import owned_attribute
 from .version import __version__
 
 install()   # the module paths of earlier releases (attitude.splitting, ...) as aliases
@@ -54,58 +55,16 @@ _OWNERS = {
 #: Namespaces of the public API that are modules (``att.torques.GravityGradient``).
 _NAMESPACES = ("torques", "ensemble", "spindown")
 
-__all__ = [
-    "__version__",
-    "RigidBody",
-    "MassProperties",
-    "AttitudeState",
-    "Ephemeris",
-    "Ensemble",
-    "Event",
-    "nutation_crossing",
-    "event_table",
-    "KeplerOrbit",
-    "fit",
-    "sample_posterior",
-    "AttitudeObservations",
-    "AngularVelocityObservations",
-    "PeriodObservations",
-    "LightcurveObservations",
-    "TLEOrbit",
-    "IGRF",
-    "SpinOrbit",
-    "torques",
-    "propagate",
-    "diagnose",
-    "classify",
-    "Classification",
-    "INERTIAL_FRAMES",
-    "SYMMETRY_RTOL",
-    "TRIANGLE_RTOL",
-    # photometry (issue 15)
-    "Polyhedron",
-    "Geometry",
-    "Lightcurve",
-    "lightcurve",
-    "fit_periods",
-    "PeriodFit",
-    "read_lightcurve",
-    *_error_names,          # every exception and warning
-]
+__all__ = ["__version__", *_OWNERS, "torques", *_error_names]
 
 
 def __getattr__(name):
-    owner = _OWNERS.get(name)
-    if owner is not None:
-        value = getattr(importlib.import_module(f"{__name__}.{owner}"), name)
-    elif name in _NAMESPACES:
-        value = importlib.import_module(f"{__name__}.{name}")
-    elif f"{__name__}.{name}" in MOVED_MODULES:   # att.splitting, att.aem, ...: warn on use
-        return sys.modules[f"{__name__}.{name}"]
-    else:
-        raise AttributeError(f"module 'attitude' has no attribute {name!r}")
-    globals()[name] = value       # later reads skip this function
-    return value
+    if name in _NAMESPACES:
+        value = globals()[name] = importlib.import_module(f"{__name__}.{name}")
+        return value
+    if name not in _OWNERS and f"{__name__}.{name}" in MOVED_MODULES:
+        return sys.modules[f"{__name__}.{name}"]    # att.splitting, att.aem: warn on use
+    return owned_attribute(__name__, _OWNERS, name, globals())
 
 
 def __dir__():

@@ -87,8 +87,10 @@ IMPORTS_BY_NAME = {
                        "namespace is outside the cycle test"),
     "attitude.deprecation": (None, "the module paths of earlier releases, forwarded to "
                                    "their new homes (deprecation.MOVED_MODULES)"),
-    "attitude.formats": (None, "the wing's public names, each imported on first use (its "
-                               "modules are the wing's own; streaming would load numba)"),
+    "attitude.foundations.lazy": (None, "the public names of `attitude` and "
+                                        "`attitude.formats`, each imported on first use "
+                                        "(streaming would load numba); the package "
+                                        "namespaces are outside the cycle test"),
     "attitude.app.cli": ("COMMANDS", "each command's module is imported when it runs, so "
                                      "that `attitude --help` loads no numpy (issue 25)"),
 }

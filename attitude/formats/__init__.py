@@ -17,7 +17,7 @@ use (PEP 562), so that ``import attitude.formats`` loads neither the propagators
 
 from __future__ import annotations
 
-import importlib
+from ..foundations.lazy import owned_attribute
 
 #: Public name -> the module of this wing that owns it.
 _OWNERS = {
@@ -29,19 +29,11 @@ _OWNERS = {
     **dict.fromkeys(("EphemerisWriter", "UniformTimes", "propagate_to_netcdf"), "streaming"),
 }
 
-__all__ = ["read_aem", "write_aem", "convert", "CCSDS_AEM_VERS", "AEM_ATTITUDE_TYPES",
-           "AEM_WRITE_TYPES", "AEM_TIME_SYSTEMS", "AEM_QUATERNION_NORM_TOL", "write_ck",
-           "convert_to_ck", "CKFiles", "leapseconds_kernel_text", "SPICE_FRAMES",
-           "TICKS_PER_SECOND", "EphemerisWriter", "UniformTimes", "propagate_to_netcdf"]
+__all__ = list(_OWNERS)
 
 
 def __getattr__(name):
-    owner = _OWNERS.get(name)
-    if owner is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{owner}"), name)
-    globals()[name] = value       # later reads skip this function
-    return value
+    return owned_attribute(__name__, _OWNERS, name, globals())
 
 
 def __dir__():

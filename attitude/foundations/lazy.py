@@ -1,0 +1,33 @@
+"""Public names imported on first use (PEP 562): the one mechanism of the package
+namespaces that load nothing until a name is read (``attitude``, ``attitude.formats``)."""
+
+from __future__ import annotations
+
+import importlib
+
+__all__ = ["owned_attribute"]
+
+
+def owned_attribute(package: str, owners: dict[str, str], name: str, namespace: dict):
+    """The name ``name`` of ``package``, read from the module ``owners[name]`` (relative
+    to the package) and kept in ``namespace`` (the package's globals: later reads skip
+    the package's ``__getattr__``); :class:`AttributeError` for a name it does not own.
+
+    Examples
+    --------
+    >>> space = {}
+    >>> f = owned_attribute("attitude", {"propagate": "propagation.propagator"},
+    ...                     "propagate", space)
+    >>> f.__module__, space["propagate"] is f
+    ('attitude.propagation.propagator', True)
+    >>> owned_attribute("attitude", {}, "nothing", space)
+    Traceback (most recent call last):
+    ...
+    AttributeError: module 'attitude' has no attribute 'nothing'
+    """
+    owner = owners.get(name)
+    if owner is None:
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{package}.{owner}"), name)
+    namespace[name] = value
+    return value
