@@ -22,6 +22,7 @@ The public names are in ``__all__``; each is imported on first use, so that
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import sys
 
 from .deprecation import MOVED_MODULES, install
@@ -29,6 +30,15 @@ from .foundations.errors import *  # noqa: F403  (every exception and warning: e
 from .foundations.errors import __all__ as _error_names
 from .foundations.lazy import owned_attribute
 from .version import __version__
+
+#: The runtime dependencies (import name -> distribution): none is imported here, but a
+#: missing one is named now rather than at the first use of a name.
+_DEPENDENCIES = {"numpy": "numpy", "scipy": "scipy", "astropy": "astropy", "erfa": "pyerfa",
+                 "xarray": "xarray", "netCDF4": "netCDF4"}
+_missing = [dist for name, dist in _DEPENDENCIES.items() if importlib.util.find_spec(name) is None]
+if _missing:
+    raise ImportError(f"attitude needs {', '.join(_missing)}: pip install attitude-dynamics "
+                      f"(or pip install {' '.join(_missing)})")
 
 install()   # the module paths of earlier releases (attitude.splitting, ...) as aliases
 

@@ -98,3 +98,18 @@ if compiled.NUMBA:
     assert type(compiled_loop.free_flow_one).__name__ == "CPUDispatcher"
 """
     loaded_after(code)
+
+
+def test_a_missing_dependency_is_named_at_import():
+    """``import attitude`` loads none of its dependencies, but says at once which is
+    missing (here xarray, hidden from the import system) instead of failing at first use."""
+    script = ("import importlib.util as iu\n"
+              "real = iu.find_spec\n"
+              "iu.find_spec = lambda name, *a: None if name == 'xarray' else real(name, *a)\n"
+              "import attitude\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          cwd=ROOT, timeout=120)
+    assert proc.returncode == 1
+    assert proc.stderr.strip().splitlines()[-1] == (
+        "ImportError: attitude needs xarray: pip install attitude-dynamics "
+        "(or pip install xarray)")
