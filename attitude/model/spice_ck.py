@@ -150,7 +150,7 @@ def _sample(sp, ck: Path, frame: str, start, stop, step, instrument) -> CKSample
     else:
         cmat = _pointing(sp, inst, ticks, frame)
         omega = _differentiated_rates(sp, inst, sclk_id, ticks, et, cmat, frame,
-                                      cover_ticks[interval])
+                                      cover_ticks[interval], cover_tdb[interval])
         source = (f"central differences of the interpolated CK attitude over "
                   f"+-{DIFFERENCE_STEP:g} s (the CK segments have no angular velocity)")
     body_frame = _frame_of(sp, inst)
@@ -407,14 +407,17 @@ def _pointing(sp, inst: int, ticks: np.ndarray, frame: str, *, strict: bool = Tr
 
 
 def _differentiated_rates(sp, inst: int, clock: int, ticks: np.ndarray, et: np.ndarray,
-                          cmat: np.ndarray, frame: str, bounds: np.ndarray) -> np.ndarray:
+                          cmat: np.ndarray, frame: str, bounds: np.ndarray,
+                          et_bounds: np.ndarray) -> np.ndarray:
     """Body rates from the attitude at ``ticks`` +- :data:`DIFFERENCE_STEP` seconds: a
     central difference, one-sided at the ends of a coverage interval.  The spacing is
     the difference of the ticks actually used (exact in floating point) over the local
     SCLK rate, so that a coarse clock's rounding does not enter."""
-    lo_et = _each(sp.sce2c, clock, et - _RATE_BASELINE)
-    hi_et = _each(sp.sce2c, clock, et + _RATE_BASELINE)
-    rate = (hi_et - lo_et) / ((et + _RATE_BASELINE) - (et - _RATE_BASELINE))
+    # the local SCLK rate (ticks per second) over +-_RATE_BASELINE inside the coverage
+    # (the clock may start with it); ET differences of nearby doubles are exact
+    et_a = np.maximum(et - _RATE_BASELINE, et_bounds[:, 0])
+    et_b = np.minimum(et + _RATE_BASELINE, et_bounds[:, 1])
+    rate = (_each(sp.sce2c, clock, et_b) - _each(sp.sce2c, clock, et_a)) / (et_b - et_a)
     h = rate * DIFFERENCE_STEP
     plus = np.minimum(ticks + h, bounds[:, 1])
     minus = np.maximum(ticks - h, bounds[:, 0])
