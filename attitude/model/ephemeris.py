@@ -212,7 +212,7 @@ class Ephemeris:
         >>> back = att.Ephemeris.from_spice(files.ck, files.sclk, files.lsk, "J2000",
         ...                                 step="30 s")
         >>> len(back), back.frame, back.dataset.attrs["inertia_known"]
-        (20, 'J2000', 0)
+        (19, 'J2000', 0)
         >>> angle = (back.rotation[::2] * eph.rotation.inv()).magnitude()
         >>> bool(angle.max() < 1e-12)                   # at the records: the samples
         True
