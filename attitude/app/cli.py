@@ -244,9 +244,10 @@ def build_parser() -> argparse.ArgumentParser:
     cls.add_argument("--body", metavar="SCENARIO.toml", help="the body (mass properties) "
                      "of this scenario's [body] table, for an ephemeris without one (read "
                      "from a CCSDS AEM or a SPICE CK) or in place of its own")
-    cls.add_argument("--inertia", metavar="A,B,C", help="the body as 3 principal moments "
-                     "or 9 tensor components (row-major, body frame), kg m2 unless a unit "
-                     "follows: '0.61,0.965,1.0' or '1,2,3 kg km2'")
+    cls.add_argument("--inertia", metavar="A,B,C", help="the body as its 3 moments about "
+                     "the body x, y, z axes (principal axes) or 9 tensor components "
+                     "(row-major, body frame), kg m2 unless a unit follows: "
+                     "'0.61,0.965,1.0' or '1,2,3 kg km2'")
 
     conv = sub.add_parser("convert",
                           help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml, or to .bc (SPICE)",

@@ -99,7 +99,8 @@ _NUMBERS = re.compile(r"^\s*\[?\s*([^,\s\]]+(?:\s*,\s*[^,\s\]]+)*)\s*\]?\s*(.*?)
 
 
 def _inertia_body(text: str) -> RigidBody:
-    """The body of ``--inertia``: 3 principal moments ``"A,B,C"`` or 9 numbers (the
+    """The body of ``--inertia``: 3 principal moments ``"A,B,C"`` about the body x, y, z
+    axes (the order matters: the ephemeris' rates are in those axes) or 9 numbers (the
     tensor, row-major), in kg m^2 unless a unit follows (``"1,2,3 kg km2"``)."""
     match = _NUMBERS.match(text)
     try:
