@@ -250,7 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "'0.61,0.965,1.0' or '1,2,3 kg km2'")
 
     conv = sub.add_parser("convert",
-                          help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml, or to .bc (SPICE)",
+                          help="convert .nc <-> .aem (CCSDS AEM KVN) / .xml <-> .bc (SPICE)",
                           description=_CONVERT_HELP,
                           formatter_class=argparse.RawDescriptionHelpFormatter)
     conv.add_argument("input", metavar="IN", help="ephemeris file (.nc, .aem, .xml, or a "
