@@ -361,3 +361,13 @@ def test_help_names_bc():
 
     text = build_parser()._subparsers._group_actions[0].choices["convert"].format_help()
     assert "mission.bc" in text and "--sclk" in text and "--step" in text
+
+
+def test_without_spiceypy_the_error_says_how_to_install(files, tmp_path, monkeypatch, capsys):
+    """spiceypy hidden (an import of it fails, as when the extra is not installed): a
+    MissingDependencyError naming the extra, exit 2 from the command line."""
+    monkeypatch.setitem(__import__("sys").modules, "spiceypy", None)
+    with pytest.raises(att.MissingDependencyError, match=r"attitude-dynamics\[spice\]"):
+        att.Ephemeris.from_spice(files.ck, files.sclk)
+    assert main(["convert", str(files.ck), str(tmp_path / "x.nc")]) == 2
+    assert "pip install" in capsys.readouterr().err
