@@ -1,0 +1,16 @@
+"""The inversion wing: shape, pole and rotation state from photometry alone.
+
+Modules: ``observations`` (lightcurves with their geometry, DAMIT's file format),
+``gaussian_image`` (the convex shape as facet areas over fixed normals), ``convex``
+(the principal-axis model and its least-squares fit).
+"""
+
+from __future__ import annotations
+
+from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex, spin_to_body
+from attitude.inversion.gaussian_image import GaussianImage, real_harmonics, sphere_triangulation
+from attitude.inversion.observations import LightcurveObservations, read_damit_lightcurves
+
+__all__ = ["LightcurveObservations", "read_damit_lightcurves", "GaussianImage",
+           "real_harmonics", "sphere_triangulation", "ConvexModel", "ConvexFit", "fit_convex",
+           "spin_to_body"]
