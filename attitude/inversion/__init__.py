@@ -9,8 +9,19 @@ from __future__ import annotations
 
 from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex, spin_to_body
 from attitude.inversion.gaussian_image import GaussianImage, real_harmonics, sphere_triangulation
-from attitude.inversion.observations import LightcurveObservations, read_damit_lightcurves
+from attitude.inversion.invert import (
+    InversionResult,
+    PeriodScan,
+    invert,
+    period_grid,
+    period_scan,
+    pole_starts,
+)
+from attitude.inversion.minkowski import facet_mesh, polyhedron_from_areas, support_polyhedron
+from attitude.inversion.observations import ObservedLightcurve, read_damit_lightcurves
 
-__all__ = ["LightcurveObservations", "read_damit_lightcurves", "GaussianImage",
+__all__ = ["ObservedLightcurve", "read_damit_lightcurves", "GaussianImage",
            "real_harmonics", "sphere_triangulation", "ConvexModel", "ConvexFit", "fit_convex",
-           "spin_to_body"]
+           "spin_to_body", "invert", "period_scan", "period_grid", "pole_starts",
+           "InversionResult", "PeriodScan", "polyhedron_from_areas", "support_polyhedron",
+           "facet_mesh"]

@@ -2,7 +2,7 @@
 
 An inversion compares, point by point, an observed brightness with the brightness of a
 model seen from where the observer was, lit from where the Sun was.
-:class:`LightcurveObservations` holds one lightcurve (one night, one session) with that
+:class:`ObservedLightcurve` holds one lightcurve (one night, one session) with that
 geometry: the epochs at the body (light-time corrected), the brightness in intensity
 units, its uncertainty, and a :class:`~attitude.photometry.Geometry` with the directions
 from the body toward the Sun and toward the observer, one per point.
@@ -33,14 +33,14 @@ from attitude.foundations.constants import AU
 from attitude.foundations.errors import LightcurveFormatError, PhotometryError
 from attitude.photometry.geometry import Geometry
 
-__all__ = ["LightcurveObservations", "read_damit_lightcurves"]
+__all__ = ["ObservedLightcurve", "read_damit_lightcurves"]
 
 #: The frame of DAMIT's vectors: ecliptic and mean equinox of J2000.
 DAMIT_FRAME = "ECLIPJ2000"
 
 
 @dataclass(frozen=True, eq=False)
-class LightcurveObservations:
+class ObservedLightcurve:
     """One lightcurve and the geometry of each of its points.
 
     Parameters
@@ -67,7 +67,7 @@ class LightcurveObservations:
     >>> import numpy as np
     >>> from astropy.time import Time
     >>> from attitude.photometry import Geometry
-    >>> obs = LightcurveObservations(Time("2026-01-01", scale="tdb"),
+    >>> obs = ObservedLightcurve(Time("2026-01-01", scale="tdb"),
     ...                              np.arange(4) * 600.0, np.ones(4),
     ...                              Geometry(sun=[1, 0, 0], observer=[1, 0.1, 0]))
     >>> len(obs), obs.calibrated
@@ -123,7 +123,7 @@ class LightcurveObservations:
         >>> import numpy as np
         >>> from astropy.time import Time
         >>> from attitude.photometry import Geometry
-        >>> obs = LightcurveObservations(Time("2026-01-01", scale="tdb"), [0.0, 60.0],
+        >>> obs = ObservedLightcurve(Time("2026-01-01", scale="tdb"), [0.0, 60.0],
         ...                              [1.0, 1.1], Geometry(sun=[2, 0, 0],
         ...                                                   observer=[0, 3, 0]))
         >>> s, o = obs.sun_and_observer()
@@ -137,7 +137,7 @@ class LightcurveObservations:
 
 
 def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",
-                           epoch: Time | None = None) -> list[LightcurveObservations]:
+                           epoch: Time | None = None) -> list[ObservedLightcurve]:
     """Read a DAMIT / ``convexinv`` lightcurve file.
 
     Parameters
@@ -156,7 +156,7 @@ def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",
 
     Returns
     -------
-    list of LightcurveObservations
+    list of ObservedLightcurve
         One per lightcurve, in file order, named ``"<file>: lightcurve k (line j)"``; the
         geometry in ``ECLIPJ2000`` with the distances in metres.
 
@@ -175,7 +175,8 @@ def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",
     ... 2451545.01 1.05  1 0 0  1 0.1 0
     ... ''')
     >>> [obs] = read_damit_lightcurves(path)
-    >>> obs.time.tolist(), obs.calibrated, round(float(obs.geometry.sun_distance[0] / 1.495978707e11), 12)
+    >>> au = 1.495978707e11
+    >>> obs.time.tolist(), obs.calibrated, round(float(obs.geometry.sun_distance[0] / au), 12)
     ([0.0, 864.0], False, 1.0)
     """
     path = Path(path)
@@ -205,7 +206,7 @@ def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",
         name = f"{path.name}: lightcurve {k + 1} (line {line_no})"
         try:
             geometry = Geometry(sun=sun, observer=earth, frame=DAMIT_FRAME)
-            observations.append(LightcurveObservations(ref, time, rows[:, 1], geometry,
+            observations.append(ObservedLightcurve(ref, time, rows[:, 1], geometry,
                                                        calibrated=calibrated, name=name))
         except PhotometryError as err:
             raise LightcurveFormatError(err.reason, path=path, key=f"line {line_no}") from None
@@ -247,6 +248,12 @@ def _blocks(lines, path):
                 fail(f"expected 8 numbers, got {' '.join(row)!r}", row_no)
             if not np.isfinite(values[j]).all():
                 fail("a value is not finite", row_no)
+            if values[j, 1] <= 0.0:
+                fail(f"the brightness must be positive (intensity units, 10**(-0.4 mag)), "
+                     f"got {row[1]}", row_no)
+            if not (values[j, 2:5].any() and values[j, 5:8].any()):
+                fail("a zero Sun or Earth vector: give the asteroid-centric ecliptic "
+                     "vectors toward them, au", row_no)
         blocks.append((line_no, fields[1] == "1", values))
         pos += 1 + n
     if pos < len(lines):
