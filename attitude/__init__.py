@@ -60,6 +60,8 @@ _OWNERS = {
     "Geometry": "photometry", "Lightcurve": "photometry", "lightcurve": "photometry",
     "fit_periods": "photometry", "PeriodFit": "photometry",
     "read_lightcurve": "photometry",
+    "invert": "inversion", "period_scan": "inversion", "read_damit_lightcurves": "inversion",
+    "InversionResult": "inversion",
 }
 
 #: Namespaces of the public API that are modules (``att.torques.GravityGradient``).

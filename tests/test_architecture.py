@@ -180,12 +180,14 @@ def test_imports_inside_functions_are_optional_or_costly():
 LAYERS = ("foundations", "model", "propagation", "analysis", "wings", "application")
 
 #: The wings: each imports the layers below and its own modules, not another wing.
-WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit")
+WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit", "inversion")
 
 #: Wings that build on another wing, with the reason: the only imports between wings.
 WING_USES = {
     # lightcurve observations are photometry's brightness model with observed geometry
     ("fitting", "photometry"),
+    # inversion reads observations with photometry's geometry (Sun and observer directions)
+    ("inversion", "photometry"),
 }
 
 #: Top-level modules: the user's namespaces (anything may be re-exported; nothing in the
