@@ -180,7 +180,7 @@ def test_imports_inside_functions_are_optional_or_costly():
 LAYERS = ("foundations", "model", "propagation", "analysis", "wings", "application")
 
 #: The wings: each imports the layers below and its own modules, not another wing.
-WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit")
+WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit", "pictures")
 
 #: Wings that build on another wing, with the reason: the only imports between wings.
 WING_USES = {
