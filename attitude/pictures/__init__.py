@@ -3,6 +3,7 @@
 3D view in one self-contained HTML file (plotly).  matplotlib, plotly and imageio-ffmpeg
 are the optional extra ``pictures``, imported when a picture is drawn."""
 
+from .animation import PoinsotAnimation, animate
 from .motion import Motion, characteristic_periods, frame_times, sample_motion
 from .poinsot import (
     body_axes,
@@ -15,6 +16,7 @@ from .poinsot import (
     on_polhode,
 )
 
-__all__ = ["Motion", "characteristic_periods", "frame_times", "sample_motion", "body_axes",
+__all__ = ["animate", "PoinsotAnimation", "Motion", "characteristic_periods", "frame_times",
+           "sample_motion", "body_axes",
            "energy_ellipsoid_surface", "energy_residual", "equivalent_ellipsoid_axes",
            "herpolhode_point", "invariable_plane", "momentum_residual", "on_polhode"]

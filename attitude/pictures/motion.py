@@ -7,10 +7,11 @@ frames: :func:`frame_times` takes the shortest and longest periods of the epheme
 else the osculating polhode period and the spin time ``2 pi / |omega|``) and spaces the
 frames evenly, whatever the sampling.  :func:`sample_motion` gives the attitude, the
 rates, ``E`` and ``|L|`` at any times inside the ephemeris: at a sample time the sample
-itself, between samples the slerp of the attitude and the rate interpolated linearly and
-projected onto the polhode of the interpolated ``(E, |L|)``
-(:func:`attitude.pictures.poinsot.on_polhode`), so that every drawn point obeys the
-construction to round-off.
+itself, between samples the rate interpolated linearly and projected onto the polhode of
+the interpolated ``(E, |L|)`` (:func:`attitude.pictures.poinsot.on_polhode`) and the
+slerp of the attitude turned by the least rotation that makes ``R I omega`` point along
+the interpolated ``L`` (:func:`align`), so that every drawn point obeys the construction
+to round-off.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from ..foundations.errors import AttitudeError, EphemerisFormatError
 from .poinsot import on_polhode
 
 __all__ = ["Motion", "characteristic_periods", "frame_times", "sample_motion",
-           "ephemeris_inertia", "nutation_series"]
+           "ephemeris_inertia", "nutation_series", "align"]
 
 #: Frames per shortest period, turns of the longest period shown, and the longest movie
 #: (frames) when neither a duration nor a span is given.
@@ -253,8 +254,33 @@ def sample_motion(eph, times, *, body_index: int | None = None) -> Motion:
         if np.any(between):
             wx[between] = on_polhode(wx[between], inertia, energy[between],
                                      momentum[between])
+            L_s = quat.rotate(q, Iw)                         # inertial L at the samples
+            target = (1 - s) * L_s[k] + s * L_s[k + 1]
+            qx[between] = align(qx[between], wx[between] @ inertia.T, target[between])
     wx = np.where(exact_left[:, None], w[k], np.where(exact_right[:, None], w[k + 1], wx))
     return Motion(x, quat.canonical(qx), wx, inertia, energy, momentum)
+
+
+def align(quaternion, body_vector, inertial_direction) -> np.ndarray:
+    """The attitudes turned by the least rotation that takes ``R body_vector`` onto
+    ``inertial_direction``: a slerped attitude made to carry the interpolated angular
+    momentum, so that the drawn ``L = R I omega`` is the ephemeris's (the rotation is of
+    the order of the slerp error).
+
+    Examples
+    --------
+    >>> q = align([0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0])
+    >>> quat.rotate(q, [1.0, 0.0, 0.0]).round(15).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    q = np.asarray(quaternion, dtype=float)
+    a = quat.rotate(q, np.asarray(body_vector, dtype=float))
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = np.asarray(inertial_direction, dtype=float)
+    b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    turn = np.concatenate([np.cross(a, b), 1.0 + np.sum(a * b, -1, keepdims=True)], -1)
+    turn /= np.linalg.norm(turn, axis=-1, keepdims=True)
+    return quat.multiply(turn, q)
 
 
 def nutation_series(eph, body_index: int | None = None) -> np.ndarray | None:
