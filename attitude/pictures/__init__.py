@@ -15,8 +15,9 @@ from .poinsot import (
     momentum_residual,
     on_polhode,
 )
+from .viewer import View, view
 
-__all__ = ["animate", "PoinsotAnimation", "Motion", "characteristic_periods", "frame_times",
-           "sample_motion", "body_axes",
-           "energy_ellipsoid_surface", "energy_residual", "equivalent_ellipsoid_axes",
-           "herpolhode_point", "invariable_plane", "momentum_residual", "on_polhode"]
+__all__ = ["animate", "PoinsotAnimation", "view", "View", "Motion", "characteristic_periods",
+           "frame_times", "sample_motion", "body_axes", "energy_ellipsoid_surface",
+           "energy_residual", "equivalent_ellipsoid_axes", "herpolhode_point",
+           "invariable_plane", "momentum_residual", "on_polhode"]

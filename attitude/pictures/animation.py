@@ -31,14 +31,8 @@ from ..foundations import quaternion as quat
 from ..foundations.errors import EphemerisFormatError, MissingDependencyError, WriterError
 from ..foundations.figures import agg_figure
 from ..model.ephemeris import write_atomically
-from ..model.shape import Polyhedron
-from .motion import (
-    ephemeris_inertia,
-    frame_times,
-    nutation_series,
-    sample_motion,
-)
-from .poinsot import body_axes, ellipsoid_surface, equivalent_ellipsoid_axes
+from .motion import body_polygons, frame_times, nutation_series, sample_motion
+from .poinsot import body_axes, ellipsoid_surface, surface_quads
 
 __all__ = ["PoinsotAnimation", "animate", "MOVIE_SUFFIXES"]
 
@@ -70,12 +64,6 @@ def scene_rotation(L) -> np.ndarray:
     return np.stack([x, np.cross(z, x), z])
 
 
-def _quads(x, y, z) -> np.ndarray:
-    """The quadrilaterals of a surface grid, (n, 4, 3)."""
-    p = np.stack([x, y, z], -1)
-    return np.stack([p[:-1, :-1], p[1:, :-1], p[1:, 1:], p[:-1, 1:]], axis=-2).reshape(-1, 4, 3)
-
-
 def _shaded(polys: np.ndarray, base) -> np.ndarray:
     """Face colours of the polygons (k, m, 3) lit from the fixed light direction."""
     from matplotlib.colors import to_rgb  # optional: the [pictures] extra
@@ -87,25 +75,6 @@ def _shaded(polys: np.ndarray, base) -> np.ndarray:
     light = _LIGHT / np.linalg.norm(_LIGHT)
     k = 0.35 + 0.65 * np.clip(np.sum(outward * n * light, -1), 0.0, 1.0)
     return np.column_stack([np.outer(k, to_rgb(base)), np.ones(len(k))])
-
-
-def _body_polygons(eph, shape, body_index):
-    """The body as polygons in the body frame, scaled to a largest extent of 1."""
-    if shape is None and not eph.is_batch and "shape_model" in eph.dataset.attrs:
-        path = Path(str(eph.dataset.attrs["shape_model"]))
-        if path.is_file():
-            shape = Polyhedron.from_obj(path, length_unit=str(
-                eph.dataset.attrs.get("shape_length_unit", "m")))
-    if shape is not None:
-        v = np.asarray(shape.vertices, dtype=float)
-        v = v - v.mean(axis=0)
-        return v[np.asarray(shape.faces)] / np.linalg.norm(v, axis=-1).max()
-    inertia = ephemeris_inertia(eph, body_index)
-    if inertia is None:                       # no mass properties: a flat box for the axes
-        return _quads(*ellipsoid_surface([0.9, 0.6, 0.3], n_lat=6, n_lon=8))
-    moments, axes = np.linalg.eigh(inertia)
-    return _quads(*ellipsoid_surface(equivalent_ellipsoid_axes(moments), axes,
-                                     n_lat=10, n_lon=20))
 
 
 def _time_unit(span: float) -> tuple[float, str]:
@@ -169,7 +138,7 @@ class PoinsotAnimation:
         self.scene_rotation = scene_rotation(L0)
         #: length of the drawn body axes (the body is scaled to a largest extent of 1)
         self.axis_length = 1.5
-        self._body = _body_polygons(eph, shape, body_index)
+        self._body = body_polygons(eph, shape, body_index)
         self.figure = agg_figure(figsize=figsize)
         self.artists: dict = {}
         self._build()
@@ -224,7 +193,7 @@ class PoinsotAnimation:
         moments, axes = np.linalg.eigh(self.inertia)
         E = float(m.energy[0])
         semi = np.sqrt(2.0 * E / moments)
-        self._ellipsoid = _quads(*ellipsoid_surface(semi, axes, n_lat=10, n_lon=20))
+        self._ellipsoid = surface_quads(*ellipsoid_surface(semi, axes, n_lat=10, n_lon=20))
         r = float(semi.max()) * 1.25
         self._setup_3d(ax, r, "Poinsot: energy ellipsoid rolling on the invariable plane")
         self._poinsot_poly = Poly3DCollection(self._ellipsoid, edgecolor="none", alpha=0.55)

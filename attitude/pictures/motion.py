@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
@@ -26,10 +27,11 @@ from ..analysis.angles import momentum_frame_angles, principal_series, reference
 from ..analysis.periods import measure_periods
 from ..foundations import quaternion as quat
 from ..foundations.errors import AttitudeError, EphemerisFormatError
-from .poinsot import on_polhode
+from ..model.shape import Polyhedron
+from .poinsot import ellipsoid_surface, equivalent_ellipsoid_axes, on_polhode, surface_quads
 
 __all__ = ["Motion", "characteristic_periods", "frame_times", "sample_motion",
-           "ephemeris_inertia", "nutation_series", "align"]
+           "ephemeris_inertia", "nutation_series", "align", "body_polygons"]
 
 #: Frames per shortest period, turns of the longest period shown, and the longest movie
 #: (frames) when neither a duration nor a span is given.
@@ -281,6 +283,39 @@ def align(quaternion, body_vector, inertial_direction) -> np.ndarray:
     turn = np.concatenate([np.cross(a, b), 1.0 + np.sum(a * b, -1, keepdims=True)], -1)
     turn /= np.linalg.norm(turn, axis=-1, keepdims=True)
     return quat.multiply(turn, q)
+
+
+def body_polygons(eph, shape=None, body_index: int | None = None) -> np.ndarray:
+    """The body as polygons (k, m, 3) in the body frame, scaled to a largest extent of 1:
+    the faces of ``shape`` (a Polyhedron) or of the OBJ named by the ephemeris attribute
+    ``shape_model`` (with ``shape_length_unit``), else the uniform ellipsoid of the
+    principal moments, else (no inertia) a flat ellipsoid that shows the axes.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0, 0, 0.1])
+    >>> polys = body_polygons(att.propagate(body, state, [0.0, 1.0]))
+    >>> polys.shape, float(np.abs(polys[..., 0]).max().round(12))      # long axis x
+    ((200, 4, 3), 1.0)
+    """
+    if shape is None and not eph.is_batch and "shape_model" in eph.dataset.attrs:
+        path = Path(str(eph.dataset.attrs["shape_model"]))
+        if path.is_file():
+            shape = Polyhedron.from_obj(path, length_unit=str(
+                eph.dataset.attrs.get("shape_length_unit", "m")))
+    if shape is not None:
+        v = np.asarray(shape.vertices, dtype=float)
+        v = v - v.mean(axis=0)
+        return v[np.asarray(shape.faces)] / np.linalg.norm(v, axis=-1).max()
+    inertia = ephemeris_inertia(eph, body_index)
+    if inertia is None:                       # no mass properties: a flat box for the axes
+        return surface_quads(*ellipsoid_surface([0.9, 0.6, 0.3], n_lat=6, n_lon=8))
+    moments, axes = np.linalg.eigh(inertia)
+    return surface_quads(*ellipsoid_surface(equivalent_ellipsoid_axes(moments), axes,
+                                     n_lat=10, n_lon=20))
 
 
 def nutation_series(eph, body_index: int | None = None) -> np.ndarray | None:

@@ -26,7 +26,7 @@ from ..foundations import quaternion as quat
 
 __all__ = ["energy_ellipsoid_surface", "equivalent_ellipsoid_axes", "ellipsoid_surface",
            "energy_residual", "momentum_residual", "on_polhode", "herpolhode_point",
-           "invariable_plane", "plane_patch", "body_axes"]
+           "invariable_plane", "plane_patch", "body_axes", "surface_quads"]
 
 #: Iterations of the Gauss-Newton projection onto the polhode (quadratic convergence:
 #: six reach round-off from a start within 1e-2 relative).
@@ -248,3 +248,15 @@ def body_axes(quaternion) -> np.ndarray:
     """
     q = np.asarray(quaternion, dtype=float)[..., None, :]
     return quat.rotate(q, np.broadcast_to(np.eye(3), q.shape[:-2] + (3, 3)))
+
+
+def surface_quads(x, y, z) -> np.ndarray:
+    """The quadrilaterals (n, 4, 3) of a surface grid (as :func:`ellipsoid_surface` gives).
+
+    Examples
+    --------
+    >>> surface_quads(*ellipsoid_surface([1.0, 1.0, 1.0], n_lat=4, n_lon=6)).shape
+    (24, 4, 3)
+    """
+    p = np.stack([x, y, z], -1)
+    return np.stack([p[:-1, :-1], p[1:, :-1], p[1:, 1:], p[:-1, 1:]], axis=-2).reshape(-1, 4, 3)
