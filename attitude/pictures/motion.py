@@ -155,7 +155,7 @@ def characteristic_periods(eph, body_index: int | None = None) -> tuple[float, f
     inertia = ephemeris_inertia(eph, body_index)
     if inertia is not None and rate > 0:
         try:
-            found = measure_periods(eph, body_index=body_index if eph.is_batch else None)
+            found = measure_periods(eph, body_index=(body_index or 0) if eph.is_batch else None)
             periods += [float(p.value) for p in found.values() if np.isfinite(p.value)]
         except AttitudeError:
             pass
@@ -333,7 +333,7 @@ def nutation_series(eph, body_index: int | None = None) -> np.ndarray | None:
     """
     if ephemeris_inertia(eph, body_index) is None:
         return None
-    series = principal_series(eph, body_index if eph.is_batch else None)
+    series = principal_series(eph, (body_index or 0) if eph.is_batch else None)
     dyn = np.sum((series.omega * series.moments) ** 2, -1) / np.maximum(
         np.sum(series.omega ** 2 * series.moments, -1), np.finfo(float).tiny)
     ref = reference_axis_for(series.moments, dyn)
