@@ -157,7 +157,7 @@ class PoinsotAnimation:
         grid = fig.add_gridspec(1, n_panels, width_ratios=widths, left=0.02, right=0.93,
                                 wspace=0.12, bottom=0.14, top=0.9)
         ax = fig.add_subplot(grid[0], projection="3d")
-        self._setup_3d(ax, 1.6, "body (inertial frame, L down)")
+        self._setup_3d(ax, 1.6, "body (L down)")
         self._body_poly = Poly3DCollection(self._body, edgecolor="none", alpha=0.9)
         ax.add_collection3d(self._body_poly)
         self.artists["body"] = self._body_poly
@@ -195,7 +195,7 @@ class PoinsotAnimation:
         semi = np.sqrt(2.0 * E / moments)
         self._ellipsoid = surface_quads(*ellipsoid_surface(semi, axes, n_lat=10, n_lon=20))
         r = float(semi.max()) * 1.25
-        self._setup_3d(ax, r, "Poinsot: energy ellipsoid rolling on the invariable plane")
+        self._setup_3d(ax, r, "Poinsot construction")
         self._poinsot_poly = Poly3DCollection(self._ellipsoid, edgecolor="none", alpha=0.55)
         ax.add_collection3d(self._poinsot_poly)
         self.artists["ellipsoid"] = self._poinsot_poly
@@ -376,10 +376,23 @@ def _write_mp4(path: Path, frames, fps: float) -> None:
 
 
 def _write_gif(path: Path, frames, fps: float) -> None:
+    """One palette for every frame (the first frame and the colours of the moving
+    artists), so that Pillow stores each frame as its change from the one before."""
+    from matplotlib.colors import to_rgb  # optional: the [pictures] extra
     from PIL import Image  # optional: Pillow, with matplotlib in the [pictures] extra
 
-    images = [Image.fromarray(f).quantize(colors=128, method=Image.Quantize.MEDIANCUT,
-                                          dither=Image.Dither.NONE) for f in frames]
+    first = next(frames)
+    colours = ("tab:orange", "tab:purple", "m", "k", "tan", "tab:cyan", *_AXIS_COLOURS)
+    swatch = (np.array([to_rgb(c) for c in colours]) * 255).astype(np.uint8)
+    row = np.resize(swatch.repeat(8, axis=0), (first.shape[1], 3))
+    strip = np.broadcast_to(row, (8,) + row.shape)
+    palette = Image.fromarray(np.concatenate([first, strip], axis=0)).quantize(
+        colors=96, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+
+    def indexed(frame):
+        return Image.fromarray(frame).quantize(palette=palette, dither=Image.Dither.NONE)
+
+    images = [indexed(first)] + [indexed(f) for f in frames]
     images[0].save(path, save_all=True, append_images=images[1:], loop=0,
                    duration=max(20, int(round(1000.0 / fps))), optimize=False)
 

@@ -23,7 +23,12 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from ..analysis.angles import momentum_frame_angles, principal_series, reference_axis_for
+from ..analysis.angles import (
+    momentum_frame_angles,
+    osculating_polhode_period,
+    principal_series,
+    reference_axis_for,
+)
 from ..analysis.periods import measure_periods
 from ..foundations import quaternion as quat
 from ..foundations.errors import AttitudeError, EphemerisFormatError
@@ -157,8 +162,10 @@ def characteristic_periods(eph, body_index: int | None = None) -> tuple[float, f
         try:
             found = measure_periods(eph, body_index=(body_index or 0) if eph.is_batch else None)
             periods += [float(p.value) for p in found.values() if np.isfinite(p.value)]
-        except AttitudeError:
-            pass
+        except AttitudeError:           # less than a cycle sampled: the osculating period
+            series = principal_series(eph, (body_index or 0) if eph.is_batch else None)
+            P = osculating_polhode_period(series.omega[:1], series.moments)
+            periods += [float(p) for p in np.ravel(P) if np.isfinite(p) and p > 0]
     if not periods:
         span = float(t[-1] - t[0])
         return span, span
