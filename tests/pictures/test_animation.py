@@ -70,7 +70,7 @@ def test_drawn_body_axes_between_samples_are_the_motion_to_the_slerp_bound():
     assert bound < 1e-3            # the bound says something: the samples are fine
 
 
-@pytest.mark.parametrize("omega", [(0.02, 0.0, 0.1), (0.1, 0.0, 0.02), (0.08, 0.0, 0.05)],
+@pytest.mark.parametrize("omega", [(0.02, 0.0, 0.1), (0.1, 0.0, 0.02), (0.0395, 0.0, 0.1)],
                          ids=["SAM", "LAM", "near-separatrix"])
 def test_polhode_and_herpolhode_points_obey_poinsot_to_1e_12(omega):
     t = np.linspace(0.0, 600.0, 61)
@@ -151,3 +151,15 @@ def test_without_inertia_the_movie_has_the_axes_and_rates(tmp_path):
     out = animate(bare, tmp_path / "bare.gif", fps=2, duration=1.0, dpi=20)
     with Image.open(out) as im:
         assert im.n_frames == 2
+
+
+def test_a_body_of_a_batch_is_drawn_with_its_own_attitude():
+    bodies = [att.RigidBody.from_principal_moments(MOMENTS)] * 3
+    states = [att.AttitudeState("2029-04-13", Rotation.random(random_state=i),
+                                [0.02, 0.0, 0.1]) for i in range(3)]
+    eph = att.propagate(bodies, states, np.linspace(0.0, 300.0, 31))
+    anim = PoinsotAnimation(eph, [0.0, 150.0], body_index=1, figsize=(4, 2))
+    anim.update(1)
+    truth = Rotation.from_quat(eph.dataset.quaternion.values[1, 15]).as_matrix()
+    np.testing.assert_allclose(_drawn_axes(anim), truth,
+                               rtol=0, atol=16 * EPS)
