@@ -50,6 +50,7 @@ import math
 import os
 import sys
 import threading
+import types
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -59,7 +60,7 @@ from ..foundations import elliptic as el
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
-__all__ = ["NUMBA", "jit", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
+__all__ = ["NUMBA", "jit", "jit_formula", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
            "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one",
            "free_flow_bodies", "free_step"]
 
@@ -83,21 +84,25 @@ def _numba():
     return numba
 
 
-#: The modules whose jitted functions call one another.  numba's cache checks only the
-#: source file of the function it loads, so a loop compiled against an older torque
-#: kernel would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
-#: cached code of all of them when any of :data:`KERNEL_SOURCES` changes.
+#: The modules whose jitted functions call one another, relative to this folder: the
+#: kernels', the Kepler solver of :mod:`attitude.model.orbit`, the shadow test of
+#: :mod:`attitude.model.shadow` and the torque formulas of :mod:`attitude.model.torques`
+#: (compiled by :mod:`.compiled_torques` with :func:`jit_formula`), the free-body,
+#: quaternion and Landen helpers (compiled by this module).  numba's cache checks only
+#: the source file of the function it loads, so a function compiled against an older
+#: callee would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
+#: cached code of all of them when any of them changes.
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
-                  "compiled_dop853.py")
-#: The sources compiled into the kernels: theirs, the Kepler solver of
-#: :mod:`attitude.model.orbit` and the shadow test of :mod:`attitude.model.shadow` (compiled
-#: by :mod:`.compiled_torques`), the free-body, quaternion and Landen helpers (compiled by
-#: this module); numba keeps those functions' own caches fresh, not the callers'.
-KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py", "../model/shadow.py",
-                                   "../model/freebody_algebra.py",
-                                   "../model/freebody_constants.py",
-                                   "../foundations/quaternion.py",
-                                   "../foundations/elliptic.py")
+                  "compiled_dop853.py", "../model/orbit.py", "../model/shadow.py",
+                  "../model/freebody_algebra.py", "../model/freebody_constants.py",
+                  "../model/torques/common.py", "../model/torques/gravity_gradient.py",
+                  "../model/torques/heavy_top.py", "../model/torques/eddy_current.py",
+                  "../model/torques/magnetic_dipole.py",
+                  "../model/torques/dissipation.py", "../model/torques/fields.py",
+                  "../model/torques/surface.py", "../foundations/quaternion.py",
+                  "../foundations/elliptic.py")
+#: The sources compiled into the kernels (all of :data:`KERNEL_MODULES`).
+KERNEL_SOURCES = KERNEL_MODULES
 
 
 def _drop_stale_cache() -> None:
@@ -116,8 +121,10 @@ def _drop_stale_cache() -> None:
             return
         folder.mkdir(exist_ok=True)
         for name in KERNEL_MODULES:
-            for pattern in (f"{name[:-3]}.*.nbi", f"{name[:-3]}.*.nbc"):
-                for old in folder.glob(pattern):
+            source = here / name
+            stem = source.name[:-3]
+            for pattern in (f"{stem}.*.nbi", f"{stem}.*.nbc"):
+                for old in (source.parent / "__pycache__").glob(pattern):
                     old.unlink()
         stamp.write_text(digest)
     except OSError:           # read-only install: numba uses its own cache folder then
@@ -315,6 +322,51 @@ def jit(function):
         return function
     _rebind(function.__globals__)
     return _njit(_NB, function)
+
+
+#: The kernels :func:`jit_formula` made, by the function they compile (each compiled once).
+_FORMULAS: dict = {}
+
+
+def jit_formula(function):
+    """:func:`jit` of a formula of the model layer together with the functions of the
+    package it calls by name (numba compiles a call only to a compiled function): the
+    one source of a formula, written on floats or arrays, compiled as it is.
+
+    Each function of the package among ``function``'s global names (a plain function
+    of an ``attitude`` module) is compiled the same way, once; ``function`` is then
+    compiled as a twin that reads those names as the compiled ones (its code object is
+    ``function.__code__``; without a callee it is ``function`` itself, ``.py_func``).
+    Without numba, ``function`` is returned unchanged.
+
+    Examples
+    --------
+    >>> from attitude.foundations.quaternion import cross_parts
+    >>> from attitude.propagation.compiled import jit_formula
+    >>> jit_formula(cross_parts)((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    (0.0, 0.0, 1.0)
+    """
+    known = _FORMULAS.get(function)
+    if known is not None:
+        return known
+    if not NUMBA:
+        _FORMULAS[function] = function
+        return function
+    namespace = function.__globals__
+    callees = {name: jit_formula(value) for name in function.__code__.co_names
+               if isinstance(value := namespace.get(name), types.FunctionType)
+               and value is not function
+               and str(getattr(value, "__module__", "")).startswith("attitude.")}
+    twin = function
+    if callees:
+        twin = types.FunctionType(function.__code__, {**namespace, **callees},
+                                  function.__name__, function.__defaults__,
+                                  function.__closure__)
+        twin.__qualname__, twin.__doc__ = function.__qualname__, function.__doc__
+        twin.__module__ = function.__module__
+    kernel = jit(twin)
+    _FORMULAS[function] = kernel
+    return kernel
 
 
 def each_on_cores(run, n: int):
