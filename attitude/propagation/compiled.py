@@ -678,40 +678,17 @@ def elliprj(x, y, z, p):
 CEPHES_NEAR1 = 0.9999999999
 _PURE_SPIN_TOL = fb.PURE_SPIN_TOL_UNSCALED
 # the freebody and quaternion helpers that numba compiles as they are (their float
-# branch chosen by isinstance); without numba, jit returns them unchanged
-_separatrix_gap = jit(fb.separatrix_gap)
-_jacobi_parameters = jit(fb.jacobi_parameters)
-_kernel_moments = jit(fb.kernel_moments)
-_kernel_vector = jit(fb.kernel_vector)
-_euler313_quaternion = jit(fb.euler313_quaternion)
-_multiply_parts = jit(quat.multiply_parts)
-_conjugate_parts = jit(quat.conjugate_parts)
-
-
-@jit
-def _invariants(I1, I2, I3, w1, w2, w3):
-    """fb.invariants (which calls fb.separatrix_gap, a Python function to numba)."""
-    d21, d32, d31 = I2 - I1, I3 - I2, I3 - I1
-    w1s, w2s, w3s = w1 * w1, w2 * w2, w3 * w3
-    Q1 = I1 * d31 * w1s + I2 * d32 * w2s
-    Q3 = I2 * d21 * w2s + I3 * d31 * w3s
-    D = _separatrix_gap(I1, I2, I3, w1, w3)
-    L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
-    return d21, d32, d31, Q1, Q3, D, L2
-
-
-_half_angles = jit(fb.half_angles)
-
-
-@jit
-def _half_theta(L1, L2, L3):
-    """fb.half_theta, float branch (its formulas: fb.half_angles, compiled)."""
-    if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
-        return math.nan, math.nan
-    h, o = _half_angles(L1, L2, L3)
-    if L3 >= 0:
-        return h, o
-    return o, h
+# branch chosen by isinstance; jit_formula compiles the helpers they call with them);
+# without numba, they are the functions themselves
+_separatrix_gap = jit_formula(fb.separatrix_gap)
+_jacobi_parameters = jit_formula(fb.jacobi_parameters)
+_kernel_moments = jit_formula(fb.kernel_moments)
+_kernel_vector = jit_formula(fb.kernel_vector)
+_euler313_quaternion = jit_formula(fb.euler313_quaternion)
+_multiply_parts = jit_formula(quat.multiply_parts)
+_conjugate_parts = jit_formula(quat.conjugate_parts)
+_invariants = jit_formula(fb.invariants)
+_half_theta = jit_formula(fb.half_theta_scalar)
 
 
 @jit
