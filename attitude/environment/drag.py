@@ -44,7 +44,7 @@ from ..foundations.errors import TorqueConfigError
 from ..foundations.quantities import to_si
 from ..model.orbit import as_path
 from ..model.torques.common import parts, stacked
-from ..model.torques.surface import (
+from ..model.torques.surface_forces import (
     corotating_air,
     drag_pressure,
     drag_torque,

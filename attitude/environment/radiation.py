@@ -74,7 +74,7 @@ from ..foundations.quantities import to_si
 from ..model.orbit import as_path
 from ..model.raycast import OFFSET_RTOL, Occluder, load_embree
 from ..model.torques.common import parts, stacked
-from ..model.torques.surface import facing, radiation_torque, radiation_weights, sunlight
+from ..model.torques.surface_forces import facing, radiation_torque, radiation_weights, sunlight
 from .facets import Facets, as_facets, triangle_areas
 from .sun import EARTH_RADIUS, SHADOW_MODELS, SUN_RADIUS, illumination
 from .torquebase import EnvironmentTorque, check_vector
@@ -438,7 +438,7 @@ class _ShadedFacets:
     def sums(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The facet sums ``W = sum_k w_k m_k`` and ``U = sum_k u_k (m_k x n_k)`` of the
         torque formula over these facets (``m_k`` the lit part's first moment), each
-        ``s.shape``, m^3 (:func:`attitude.model.torques.surface.radiation_torque`)."""
+        ``s.shape``, m^3 (:func:`attitude.model.torques.surface_forces.radiation_torque`)."""
         s = np.asarray(s, dtype=float)
         flat = s.reshape(-1, 3)
         c, _, m = self.lit(flat)

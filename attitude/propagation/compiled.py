@@ -99,7 +99,7 @@ KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "../model/torques/heavy_top.py", "../model/torques/eddy_current.py",
                   "../model/torques/magnetic_dipole.py",
                   "../model/torques/dissipation.py", "../model/torques/fields.py",
-                  "../model/torques/surface.py", "../foundations/quaternion.py",
+                  "../model/torques/surface_forces.py", "../foundations/quaternion.py",
                   "../foundations/elliptic.py")
 #: The sources compiled into the kernels (all of :data:`KERNEL_MODULES`).
 KERNEL_SOURCES = KERNEL_MODULES
@@ -347,8 +347,9 @@ def jit_formula(function):
     (0.0, 0.0, 1.0)
     """
     known = _FORMULAS.get(function)
-    if known is not None:
-        return known
+    if known is not None:       # (once numba is loaded, the dispatcher, not the stand-in)
+        return known.dispatcher if isinstance(known, _Kernel) and _LOADED.is_set() \
+            else known
     if not NUMBA:
         _FORMULAS[function] = function
         return function

@@ -6,9 +6,25 @@ than the physics.  :func:`compile_torques` asks each model for its compiled form
 parameters and the paths or fields it reads, each with a ``compiled_parameters`` of its
 own) and lays the models out in three flat arrays, ``kinds`` (one formula per term),
 ``offsets`` (where each term's numbers start) and ``params`` (all the numbers);
-:func:`body_torque` evaluates their sum at one time, attitude and rate with the same
-formulas as the models' ``__call__``, in the same order of operations, so that the two
-agree to round-off.
+:func:`body_torque` evaluates their sum at one time, attitude and rate.
+
+One source per formula: the kernels write no formula of a model.  Each model's formula
+is a function of the model layer in component form, written on floats or arrays alike
+(:func:`~attitude.model.torques.gravity_gradient.gravity_gradient_torque`,
+``heavy_top_torque``, ``eddy_current_torque``, ``magnetic_dipole_torque``,
+``dissipation_torque``, the tilted dipole of :mod:`attitude.model.torques.fields`, the
+radiation pressure and drag of :mod:`attitude.model.torques.surface_forces`, the
+rotation :func:`attitude.foundations.quaternion.rotate_parts`, the shadow test of
+:mod:`attitude.model.shadow`, Kepler's equation of :mod:`attitude.model.orbit`): the
+model's ``evaluate`` runs it on arrays over time, and this module compiles it with
+:func:`~attitude.propagation.compiled.jit_formula` (:data:`FORMULAS`: each compiled name
+and its function).  What stays here is reading the numbers of ``params``, the facet
+sums (a loop, where numpy takes a matrix product: the one place where the two paths
+round differently, besides numpy's vectorised ``sin``/``cos``/``exp``) and, for paths
+and fields, the Keplerian position and velocity and the cubics' Horner rule (written as
+:meth:`attitude.model.orbit.KeplerOrbit.state` and
+:class:`attitude.environment.TimeTable` write them).  A new torque model is then its
+function, its ``compiled_parameters``, a term code and its layout here.
 
 ==========================  =============================================================
 term                        numbers from ``offsets[k] + 1``
@@ -17,7 +33,8 @@ term                        numbers from ``offsets[k] + 1``
 ``constant_body``           torque (3)
 ``constant_inertial``       torque (3)
 ``heavy_top``               ``m g``, up (3), pivot -> centre of mass (3)
-``eddy_current``            isotropic (0 or 1), scalar, tensor (9), field
+``eddy_current``            isotropic (0 or 1), scalar, tensor (9: an isotropic one's
+                            scalar times the identity, which the kernel uses), field
 ``magnetic_dipole``         moment (3), field
 ``dissipation``             ``k``, inertia (9)
 ``radiation_pressure``      time offset, pressure at 1 au, au, shadow (0 none, 1 conical,
@@ -76,7 +93,7 @@ from ..model.torques.fields import dipole_direction, dipole_field
 from ..model.torques.gravity_gradient import gravity_gradient_torque
 from ..model.torques.heavy_top import heavy_top_torque
 from ..model.torques.magnetic_dipole import magnetic_dipole_torque
-from ..model.torques.surface import (
+from ..model.torques.surface_forces import (
     corotating_air,
     drag_pressure,
     drag_torque,
@@ -219,7 +236,7 @@ def _three(params, i):
 @_jit
 def _radiation(params, i, t, q):
     """Solar radiation pressure (:class:`attitude.environment.SolarRadiationPressure`):
-    the formulas of :mod:`attitude.model.torques.surface`, the facet sums in a loop."""
+    the formulas of :mod:`attitude.model.torques.surface_forces`, the facet sums in a loop."""
     t = t + params[i]
     n = int(params[i + 6])
     sun = _position(params, int(params[i + 7]), t)
@@ -255,7 +272,7 @@ def _radiation(params, i, t, q):
 @_jit
 def _drag(params, i, t, q):
     """Free-molecular drag (:class:`attitude.environment.AerodynamicDrag`): the formulas
-    of :mod:`attitude.model.torques.surface`, the facet sum in a loop."""
+    of :mod:`attitude.model.torques.surface_forces`, the facet sum in a loop."""
     t = t + params[i]
     layers, n = int(params[i + 5]), int(params[i + 6])
     orbit = int(params[i + 7])
