@@ -146,7 +146,7 @@ class TiltedDipoleField:
         """Field at the body, inertial components, T, shape ``S + (3,)``."""
         t = np.asarray(t, dtype=float)
         r = np.asarray(self.orbit.position(t), dtype=float)
-        m_hat = self._direction(t if r.ndim > 1 else float(t))
+        m_hat = self._direction(float(t) if t.ndim == 0 else t)
         return stacked(dipole_field(MU0_OVER_4PI * self.moment, m_hat, parts(r)))
 
     def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
