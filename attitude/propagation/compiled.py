@@ -15,9 +15,13 @@ when numba is absent or disabled:
   (Carlson's symmetric integrals): the algorithms of ``scipy.special`` (Cephes' AGM
   for ``ellipj``, Carlson's duplication for ``R_F``, ``R_J``), as scalar code;
 - :func:`free_flow_one`: ``splitting._free_flow1`` (the exact free flow of one body
-  over one step) on arrays updated in place.
+  over one step) on arrays updated in place;
+- :func:`jit_formula`: a formula of the model layer (written on floats or arrays)
+  compiled as it is, with the package's functions it calls: the free-body invariants,
+  half angles and frames here, the torque formulas in :mod:`.compiled_torques` (one
+  source per formula, docs/architecture.md).
 
-Every function here is a plain-arithmetic twin of the numpy/scipy path; the tests run
+The special functions here are plain-arithmetic twins of scipy's; the tests run
 each one compiled and as plain Python (the module loaded with ``ATTITUDE_NO_NUMBA=1``)
 against scipy, mpmath and the splitting module.
 
