@@ -42,8 +42,15 @@ from ..foundations import quaternion as quat
 from ..foundations.constants import EARTH_ROTATION_RATE
 from ..foundations.errors import TorqueConfigError
 from ..foundations.quantities import to_si
-from ..foundations.quaternion import cross
 from ..model.orbit import as_path
+from ..model.torques.common import parts, stacked
+from ..model.torques.surface_forces import (
+    corotating_air,
+    drag_pressure,
+    drag_torque,
+    exponential_density,
+    facing,
+)
 from .facets import Facets, as_facets
 from .sun import EARTH_RADIUS
 from .torquebase import EnvironmentTorque, check_vector
@@ -119,10 +126,10 @@ class ExponentialAtmosphere:
         if h.ndim == 0:                                  # one epoch: plain floats
             x = float(h)
             k = min(max(bisect.bisect_right(self._bases, x) - 1, 0), len(self._bases) - 1)
-            return np.float64(self._rho[k] * math.exp(-(x - self._bases[k])
-                                                      / self._scale[k]))
+            return np.float64(exponential_density(x, self._bases[k], float(self._rho[k]),
+                                                  float(self._scale[k])))
         k = np.clip(np.searchsorted(self._base, h, side="right") - 1, 0, len(self._base) - 1)
-        return self._rho[k] * np.exp(-(h - self._base[k]) / self._scale[k])
+        return exponential_density(h, self._base[k], self._rho[k], self._scale[k])
 
     def __call__(self, altitude) -> np.ndarray:
         return self.density(altitude)
@@ -198,7 +205,6 @@ class AerodynamicDrag(EnvironmentTorque):
             raise TorqueConfigError(f"must be >= 0, got {self.cd!r}", key="cd")
         self.center_of_mass = check_vector(center_of_mass, "center_of_mass")
         self.corotation = bool(corotation)
-        self._omega_earth = np.array([-1.0, 1.0, 0.0]) * EARTH_ROTATION_RATE
         self._density_path = None
         if callable(getattr(self.density, "along", None)):   # time and place: NRLMSIS
             epoch = getattr(orbit, "epoch", None) if epoch is None else epoch
@@ -213,6 +219,7 @@ class AerodynamicDrag(EnvironmentTorque):
         self._r = f.centroids - self.center_of_mass
         self._ar = f.areas[:, None] * self._r                     # (n, 3): A_k r_k
         self._normals = np.ascontiguousarray(f.normals)
+        self._normal_parts = tuple(np.ascontiguousarray(f.normals[:, k]) for k in range(3))
 
     def _check_density(self, altitude) -> np.ndarray:
         rho = np.asarray(self.density(altitude), dtype=float)
@@ -233,49 +240,54 @@ class AerodynamicDrag(EnvironmentTorque):
         r = np.asarray(self.orbit.position(t), dtype=float)
         v = np.asarray(self.orbit.velocity(t), dtype=float)
         if self.corotation:
-            v = v - self._omega_earth * r[..., [1, 0, 2]]   # omega_E x r = w (-y, x, 0)
+            v = stacked(corotating_air(EARTH_ROTATION_RATE, parts(r), parts(v)))
         if self._density_path is not None:
             rho = self._density_path(t)
         else:
             rho = self._check_density(np.sqrt(np.sum(r * r, axis=-1)) - EARTH_RADIUS)
-        return v, 0.5 * rho * np.sum(v * v, axis=-1) * self.cd
+        return v, drag_pressure(rho, np.sum(v * v, axis=-1), self.cd)
+
+    def _facing(self, v_hat: np.ndarray) -> np.ndarray:
+        """The facets' cosines ``(..., n)`` for flow directions ``v_hat (..., 3)``."""
+        return facing(self._normal_parts, tuple(x[..., None] for x in parts(v_hat))
+                      if v_hat.ndim > 1 else parts(v_hat))
 
     def _weights(self, t, quaternion):
         v_in, q = self.airflow(t)
         v = quat.rotate(quaternion, v_in, inverse=True)
         speed = np.sqrt(np.sum(v * v, axis=-1, keepdims=True))
         v_hat = np.divide(v, speed, out=np.zeros_like(v), where=speed > 0)
-        c = np.maximum(v_hat @ self.facets.normals.T, 0.0)          # (..., n)
-        return v_hat, np.asarray(q)[..., None], c
+        return v_hat, np.asarray(q)[..., None], self._facing(v_hat)
 
     def evaluate(self, t, quaternion, omega_body, body):
         if t.ndim == 0 and quaternion.ndim == 1:
             return self._one_epoch(float(t), quaternion)
         v_hat, q, c = self._weights(t, quaternion)
-        return -q * cross(c @ self._ar, v_hat)
+        return stacked(drag_torque(q[..., 0], parts(c @ self._ar), parts(v_hat)))
 
     def _one_epoch(self, t: float, quaternion: np.ndarray) -> np.ndarray:
         """:meth:`evaluate` at one epoch and attitude, in floats where numpy is slow."""
         t = self.time(t)
-        x, y, z = np.asarray(self.orbit.position(t), dtype=float).tolist()
-        vx, vy, vz = np.asarray(self.orbit.velocity(t), dtype=float).tolist()
+        r = np.asarray(self.orbit.position(t), dtype=float).tolist()
+        v = np.asarray(self.orbit.velocity(t), dtype=float).tolist()
         if self.corotation:
-            vx, vy = vx + EARTH_ROTATION_RATE * y, vy - EARTH_ROTATION_RATE * x
+            v = corotating_air(EARTH_ROTATION_RATE, r, v)
+        x, y, z = r
         if self._density_path is not None:
             rho = float(self._density_path(t))
         else:
             rho = float(self._check_density(np.float64(math.sqrt(x * x + y * y + z * z)
                                                        - EARTH_RADIUS)))
+        vx, vy, vz = v
         v2 = vx * vx + vy * vy + vz * vz
         if v2 == 0.0 or rho == 0.0:
             return np.zeros(3)
         speed = math.sqrt(v2)
-        v_hat = np.array(quat.rotate_parts(quaternion.tolist(),
-                                           (vx / speed, vy / speed, vz / speed),
-                                           inverse=True))
-        c = self._normals @ v_hat
-        np.maximum(c, 0.0, out=c)
-        return (-0.5 * rho * v2 * self.cd) * cross(c @ self._ar, v_hat)
+        v_hat = quat.rotate_parts(quaternion.tolist(), (vx / speed, vy / speed, vz / speed),
+                                  inverse=True)
+        c = self._facing(np.array(v_hat))
+        return stacked(drag_torque(drag_pressure(rho, v2, self.cd),
+                                   tuple((c @ self._ar).tolist()), v_hat))
 
     def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
         """``[("drag", {...})]``: the terms of the one-epoch evaluation (facet sums, drag
@@ -316,8 +328,7 @@ class AerodynamicDrag(EnvironmentTorque):
         """Torque per unit dynamic pressure ``1/2 rho v^2 C_D``, m^3, for the velocity
         relative to the air along ``directions`` (body frame)."""
         v_hat = np.asarray(directions, dtype=float)
-        c = np.maximum(v_hat @ self._normals.T, 0.0)
-        return -cross(c @ self._ar, v_hat)
+        return stacked(drag_torque(1.0, parts(self._facing(v_hat) @ self._ar), parts(v_hat)))
 
     def pressure_at(self, t) -> np.ndarray:
         """``1/2 rho v^2 C_D`` at ``t``, N/m^2."""

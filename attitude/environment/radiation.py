@@ -64,8 +64,6 @@ References
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..foundations import quaternion as quat
@@ -73,9 +71,10 @@ from ..foundations.constants import AU as ASTRONOMICAL_UNIT
 from ..foundations.constants import SOLAR_PRESSURE_1AU
 from ..foundations.errors import TorqueConfigError
 from ..foundations.quantities import to_si
-from ..foundations.quaternion import cross
 from ..model.orbit import as_path
 from ..model.raycast import OFFSET_RTOL, Occluder, load_embree
+from ..model.torques.common import parts, stacked
+from ..model.torques.surface_forces import facing, radiation_torque, radiation_weights, sunlight
 from .facets import Facets, as_facets, triangle_areas
 from .sun import EARTH_RADIUS, SHADOW_MODELS, SUN_RADIUS, illumination
 from .torquebase import EnvironmentTorque, check_vector
@@ -162,6 +161,7 @@ class SolarRadiationPressure(EnvironmentTorque):
         f = self.facets
         self._r = f.centroids - self.center_of_mass                # (n, 3)
         self._normals = np.ascontiguousarray(f.normals)
+        self._normal_parts = tuple(np.ascontiguousarray(f.normals[:, k]) for k in range(3))
         self._rxn = np.cross(self._r, f.normals)                    # (n, 3)
         self._one_minus_s = f.areas * (1.0 - f.specular)            # A (1 - rho_s)
         self._spec = f.areas * f.specular                           # A rho_s
@@ -209,52 +209,51 @@ class SolarRadiationPressure(EnvironmentTorque):
         t = self.time(np.asarray(t, dtype=float))
         r_sun = np.asarray(self.sun.position(t), dtype=float)
         r_sat = np.asarray(self.orbit.position(t), dtype=float)
-        d = r_sun - r_sat
-        dist = np.sqrt(np.sum(d * d, axis=-1))
-        p = self.pressure * (ASTRONOMICAL_UNIT / dist) ** 2
+        p, s = sunlight(self.pressure, ASTRONOMICAL_UNIT, parts(r_sun), parts(r_sat))
         if self.shadow is not None:
             p = p * illumination(r_sat, r_sun, self.shadow)
-        return d / dist[..., None], p
+        return stacked(s), p
 
     def _weights(self, t, quaternion):
         s_in, p = self.sunlight(t)
         s = quat.rotate(quaternion, s_in, inverse=True)              # (..., 3) body
-        c = np.maximum(s @ self.facets.normals.T, 0.0)               # (..., n)
-        w = c * self._one_minus_s
-        u = c * (c * self._spec + self._diff)
+        w, u = self._facet_weights(s)
         return s, np.asarray(p)[..., None], w, u
+
+    def _facet_weights(self, s: np.ndarray) -> tuple:
+        """``(w, u)`` of the facets, ``(..., n)``, for Sun directions ``s (..., 3)``."""
+        c = facing(self._normal_parts, tuple(x[..., None] for x in parts(s))
+                   if s.ndim > 1 else parts(s))
+        return radiation_weights(c, self._one_minus_s, self._spec, self._diff)
+
+    def _torque(self, p, s: np.ndarray, w: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """The torque from the facets' weights (their sums, then the formula)."""
+        W, U = w @ self._r, u @ self._rxn
+        if self._shaded is not None:
+            Ws, Us = self._shaded.sums(s)
+            W, U = W + Ws, U + Us
+        return stacked(radiation_torque(p, parts(W), parts(U), parts(s)))
 
     def evaluate(self, t, quaternion, omega_body, body):
         if t.ndim == 0 and quaternion.ndim == 1:
             return self._one_epoch(float(t), quaternion)
         s, p, w, u = self._weights(t, quaternion)
-        torque = cross(w @ self._r, s) + 2.0 * (u @ self._rxn)
-        if self._shaded is not None:
-            torque = torque + self._shaded.torque(s)
-        return -p * torque
+        return self._torque(p[..., 0], s, w, u)
 
     def _one_epoch(self, t: float, quaternion: np.ndarray) -> np.ndarray:
         """:meth:`evaluate` at one epoch and attitude, in floats where numpy is slow."""
         t = self.time(t)
         r_sun = np.asarray(self.sun.position(t), dtype=float)
         r_sat = np.asarray(self.orbit.position(t), dtype=float)
-        dx, dy, dz = (r_sun - r_sat).tolist()
-        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-        p = self.pressure * (ASTRONOMICAL_UNIT / dist) ** 2
+        p, s = sunlight(self.pressure, ASTRONOMICAL_UNIT, r_sun.tolist(), r_sat.tolist())
+        p = float(p)
         if self.shadow is not None:
             p *= float(illumination(r_sat, r_sun, self.shadow))
         if p == 0.0:
             return np.zeros(3)
-        s = np.array(quat.rotate_parts(quaternion.tolist(),
-                                       (dx / dist, dy / dist, dz / dist), inverse=True))
-        c = self._normals @ s
-        np.maximum(c, 0.0, out=c)
-        w = c * self._one_minus_s
-        u = c * (c * self._spec + self._diff)
-        torque = cross(w @ self._r, s) + 2.0 * (u @ self._rxn)
-        if self._shaded is not None:
-            torque = torque + self._shaded.torque(s)
-        return -p * torque
+        s = np.array(quat.rotate_parts(quaternion.tolist(), s, inverse=True))
+        w, u = self._facet_weights(s)
+        return self._torque(p, s, w, u)
 
     def compiled_parameters(self, body, t_span=None) -> list[tuple[str, dict]] | None:
         """``[("radiation_pressure", {...})]``: the terms of the one-epoch evaluation
@@ -307,13 +306,8 @@ class SolarRadiationPressure(EnvironmentTorque):
     def unit_torque(self, directions) -> np.ndarray:
         """Torque per unit pressure, m^3, for the Sun in ``directions`` (body frame)."""
         s = np.asarray(directions, dtype=float)
-        c = np.maximum(s @ self._normals.T, 0.0)
-        w = c * self._one_minus_s
-        u = c * (c * self._spec + self._diff)
-        torque = cross(w @ self._r, s) + 2.0 * (u @ self._rxn)
-        if self._shaded is not None:
-            torque = torque + self._shaded.torque(s)
-        return -torque
+        w, u = self._facet_weights(s)
+        return self._torque(1.0, s, w, u)
 
     def pressure_at(self, t) -> np.ndarray:
         """Radiation pressure at the body times the visible fraction of the Sun, N/m^2."""
@@ -441,24 +435,24 @@ class _ShadedFacets:
                                     axis=-1).reshape(m, n, 3)
         return c, area, moment
 
-    def torque(self, s: np.ndarray) -> np.ndarray:
-        """The bracket of the torque formula over these facets, ``(N, 3)``, m^3 (times
-        ``-P`` it is the torque)."""
+    def sums(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The facet sums ``W = sum_k w_k m_k`` and ``U = sum_k u_k (m_k x n_k)`` of the
+        torque formula over these facets (``m_k`` the lit part's first moment), each
+        ``s.shape``, m^3 (:func:`attitude.model.torques.surface_forces.radiation_torque`)."""
         s = np.asarray(s, dtype=float)
         flat = s.reshape(-1, 3)
         c, _, m = self.lit(flat)
-        w = c * self.one_minus_s
-        u = c * (c * self.spec + self.diff)
-        out = (cross(np.einsum("en,enx->ex", w, m), flat)
-               + 2.0 * np.einsum("en,enx->ex", u, np.cross(m, self.normals)))
-        return out.reshape(s.shape)
+        w, u = radiation_weights(c, self.one_minus_s, self.spec, self.diff)
+        W = np.einsum("en,enx->ex", w, m)
+        U = np.einsum("en,enx->ex", u, np.cross(m, self.normals))
+        return W.reshape(s.shape), U.reshape(s.shape)
 
     def force(self, s: np.ndarray) -> np.ndarray:
         """The bracket of the force over these facets, ``(..., 3)``, m^2."""
         s = np.asarray(s, dtype=float)
         flat = s.reshape(-1, 3)
         c, area, _ = self.lit(flat)
-        w = c * self.one_minus_s * area
-        u = c * (c * self.spec + self.diff) * area
+        w, u = radiation_weights(c, self.one_minus_s, self.spec, self.diff)
+        w, u = w * area, u * area
         out = w.sum(axis=-1)[:, None] * flat + 2.0 * (u @ self.normals)
         return out.reshape(s.shape)

@@ -11,10 +11,12 @@ Two forms of each operation, with the same formulas:
   fast path on plain floats (a numpy call on one element costs as much as ~20 float
   operations, and the one-body integrators call these once per step);
 - the **component form** (:func:`multiply_parts`, :func:`conjugate_parts`,
-  :func:`rotate_parts`) takes tuples of components ``(x, y, z, w)`` and ``(vx, vy, vz)``
-  that are plain floats or arrays of any one shape: the kernels that keep each
+  :func:`rotate_parts`, :func:`cross_parts`) takes tuples of components ``(x, y, z, w)``
+  and ``(vx, vy, vz)`` that are plain floats or arrays of any one shape: the kernels that keep each
   component in its own array (the closed form, the splitting free flow) use it without
-  stacking and unstacking.
+  stacking and unstacking.  numba compiles these as they are (plain arithmetic on
+  floats): the compiled kernels of :mod:`attitude.propagation` use them, so that each
+  formula has one source.
 
 Examples
 --------
@@ -39,6 +41,7 @@ __all__ = [
     "multiply_parts",
     "conjugate_parts",
     "rotate_parts",
+    "cross_parts",
 ]
 
 
@@ -93,6 +96,20 @@ def rotate_parts(q, v, inverse: bool = False) -> tuple:
     return (vx + w * tx + uy * tz - uz * ty,
             vy + w * ty + uz * tx - ux * tz,
             vz + w * tz + ux * ty - uy * tx)
+
+
+def cross_parts(a, b) -> tuple:
+    """Cross product ``a x b`` of vectors given as component tuples ``(x, y, z)``
+    (floats or arrays of shapes that broadcast).
+
+    Examples
+    --------
+    >>> cross_parts((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    (0.0, 0.0, 1.0)
+    """
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0)
 
 
 # ===========================================================================
@@ -217,9 +234,5 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     array([0., 0., 1.])
     """
     if a.ndim == 1 and b.ndim == 1:
-        a0, a1, a2 = a.tolist()
-        b0, b1, b2 = b.tolist()
-        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+        return np.array(cross_parts(a.tolist(), b.tolist()))
+    return np.stack(cross_parts(_parts(a), _parts(b)), axis=-1)

@@ -36,6 +36,7 @@ __all__ = [
     "jacobi_parameters",
     "characteristic",
     "half_theta",
+    "half_theta_scalar",
     "half_angles",
     "euler313_quaternion",
 ]
@@ -237,14 +238,27 @@ def half_theta(L1, L2, L3):
     [0.707106781186548, 0.707106781186548]
     """
     if isinstance(L3, float) and isinstance(L1, float) and isinstance(L2, float):
-        if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
-            return math.nan, math.nan
-        h, o = (float(x) for x in half_angles(L1, L2, L3))
-        return (h, o) if L3 >= 0 else (o, h)
+        return half_theta_scalar(L1, L2, L3)
     with np.errstate(invalid="ignore", divide="ignore"):
         h, o = half_angles(L1, L2, L3)
     pos = L3 >= 0
     return np.where(pos, h, o), np.where(pos, o, h)
+
+
+def half_theta_scalar(L1, L2, L3):
+    """:func:`half_theta` of plain floats, as floats: the one source of its scalar form
+    (numba compiles it as it is for the kernels of :mod:`attitude.propagation.compiled`).
+
+    Examples
+    --------
+    >>> half_theta_scalar(0.0, 0.0, -1.0)         # L along -z: theta = 180 deg
+    (0.0, 1.0)
+    """
+    if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
+        return math.nan, math.nan
+    h, o = half_angles(L1, L2, L3)
+    h, o = float(h), float(o)
+    return (h, o) if L3 >= 0 else (o, h)
 
 
 def half_angles(L1, L2, L3):

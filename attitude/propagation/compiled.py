@@ -15,9 +15,13 @@ when numba is absent or disabled:
   (Carlson's symmetric integrals): the algorithms of ``scipy.special`` (Cephes' AGM
   for ``ellipj``, Carlson's duplication for ``R_F``, ``R_J``), as scalar code;
 - :func:`free_flow_one`: ``splitting._free_flow1`` (the exact free flow of one body
-  over one step) on arrays updated in place.
+  over one step) on arrays updated in place;
+- :func:`jit_formula`: a formula of the model layer (written on floats or arrays)
+  compiled as it is, with the package's functions it calls: the free-body invariants,
+  half angles and frames here, the torque formulas in :mod:`.compiled_torques` (one
+  source per formula, docs/architecture.md).
 
-Every function here is a plain-arithmetic twin of the numpy/scipy path; the tests run
+The special functions here are plain-arithmetic twins of scipy's; the tests run
 each one compiled and as plain Python (the module loaded with ``ATTITUDE_NO_NUMBA=1``)
 against scipy, mpmath and the splitting module.
 
@@ -50,6 +54,7 @@ import math
 import os
 import sys
 import threading
+import types
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -59,7 +64,7 @@ from ..foundations import elliptic as el
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
-__all__ = ["NUMBA", "jit", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
+__all__ = ["NUMBA", "jit", "jit_formula", "set_compile_notice", "quiet_compiles", "COMPILE_NOTICE",
            "each_on_cores", "ellipj", "elliprf", "elliprj", "free_flow_one",
            "free_flow_bodies", "free_step"]
 
@@ -83,21 +88,25 @@ def _numba():
     return numba
 
 
-#: The modules whose jitted functions call one another.  numba's cache checks only the
-#: source file of the function it loads, so a loop compiled against an older torque
-#: kernel would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
-#: cached code of all of them when any of :data:`KERNEL_SOURCES` changes.
+#: The modules whose jitted functions call one another, relative to this folder: the
+#: kernels', the Kepler solver of :mod:`attitude.model.orbit`, the shadow test of
+#: :mod:`attitude.model.shadow` and the torque formulas of :mod:`attitude.model.torques`
+#: (compiled by :mod:`.compiled_torques` with :func:`jit_formula`), the free-body,
+#: quaternion and Landen helpers (compiled by this module).  numba's cache checks only
+#: the source file of the function it loads, so a function compiled against an older
+#: callee would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
+#: cached code of all of them when any of them changes.
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
-                  "compiled_dop853.py")
-#: The sources compiled into the kernels: theirs, the Kepler solver of
-#: :mod:`attitude.model.orbit` and the shadow test of :mod:`attitude.model.shadow` (compiled
-#: by :mod:`.compiled_torques`), the free-body, quaternion and Landen helpers (compiled by
-#: this module); numba keeps those functions' own caches fresh, not the callers'.
-KERNEL_SOURCES = KERNEL_MODULES + ("../model/orbit.py", "../model/shadow.py",
-                                   "../model/freebody_algebra.py",
-                                   "../model/freebody_constants.py",
-                                   "../foundations/quaternion.py",
-                                   "../foundations/elliptic.py")
+                  "compiled_dop853.py", "../model/orbit.py", "../model/shadow.py",
+                  "../model/freebody_algebra.py", "../model/freebody_constants.py",
+                  "../model/torques/common.py", "../model/torques/gravity_gradient.py",
+                  "../model/torques/heavy_top.py", "../model/torques/eddy_current.py",
+                  "../model/torques/magnetic_dipole.py",
+                  "../model/torques/dissipation.py", "../model/torques/fields.py",
+                  "../model/torques/surface_forces.py", "../foundations/quaternion.py",
+                  "../foundations/elliptic.py")
+#: The sources compiled into the kernels (all of :data:`KERNEL_MODULES`).
+KERNEL_SOURCES = KERNEL_MODULES
 
 
 def _drop_stale_cache() -> None:
@@ -116,8 +125,10 @@ def _drop_stale_cache() -> None:
             return
         folder.mkdir(exist_ok=True)
         for name in KERNEL_MODULES:
-            for pattern in (f"{name[:-3]}.*.nbi", f"{name[:-3]}.*.nbc"):
-                for old in folder.glob(pattern):
+            source = here / name
+            stem = source.name[:-3]
+            for pattern in (f"{stem}.*.nbi", f"{stem}.*.nbc"):
+                for old in (source.parent / "__pycache__").glob(pattern):
                     old.unlink()
         stamp.write_text(digest)
     except OSError:           # read-only install: numba uses its own cache folder then
@@ -315,6 +326,52 @@ def jit(function):
         return function
     _rebind(function.__globals__)
     return _njit(_NB, function)
+
+
+#: The kernels :func:`jit_formula` made, by the function they compile (each compiled once).
+_FORMULAS: dict = {}
+
+
+def jit_formula(function):
+    """:func:`jit` of a formula of the model layer together with the functions of the
+    package it calls by name (numba compiles a call only to a compiled function): the
+    one source of a formula, written on floats or arrays, compiled as it is.
+
+    Each function of the package among ``function``'s global names (a plain function
+    of an ``attitude`` module) is compiled the same way, once; ``function`` is then
+    compiled as a twin that reads those names as the compiled ones (its code object is
+    ``function.__code__``; without a callee it is ``function`` itself, ``.py_func``).
+    Without numba, ``function`` is returned unchanged.
+
+    Examples
+    --------
+    >>> from attitude.foundations.quaternion import cross_parts
+    >>> from attitude.propagation.compiled import jit_formula
+    >>> jit_formula(cross_parts)((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    (0.0, 0.0, 1.0)
+    """
+    known = _FORMULAS.get(function)
+    if known is not None:       # (once numba is loaded, the dispatcher, not the stand-in)
+        return known.dispatcher if isinstance(known, _Kernel) and _LOADED.is_set() \
+            else known
+    if not NUMBA:
+        _FORMULAS[function] = function
+        return function
+    namespace = function.__globals__
+    callees = {name: jit_formula(value) for name in function.__code__.co_names
+               if isinstance(value := namespace.get(name), types.FunctionType)
+               and value is not function
+               and str(getattr(value, "__module__", "")).startswith("attitude.")}
+    twin = function
+    if callees:
+        twin = types.FunctionType(function.__code__, {**namespace, **callees},
+                                  function.__name__, function.__defaults__,
+                                  function.__closure__)
+        twin.__qualname__, twin.__doc__ = function.__qualname__, function.__doc__
+        twin.__module__ = function.__module__
+    kernel = jit(twin)
+    _FORMULAS[function] = kernel
+    return kernel
 
 
 def each_on_cores(run, n: int):
@@ -626,40 +683,17 @@ def elliprj(x, y, z, p):
 CEPHES_NEAR1 = 0.9999999999
 _PURE_SPIN_TOL = fb.PURE_SPIN_TOL_UNSCALED
 # the freebody and quaternion helpers that numba compiles as they are (their float
-# branch chosen by isinstance); without numba, jit returns them unchanged
-_separatrix_gap = jit(fb.separatrix_gap)
-_jacobi_parameters = jit(fb.jacobi_parameters)
-_kernel_moments = jit(fb.kernel_moments)
-_kernel_vector = jit(fb.kernel_vector)
-_euler313_quaternion = jit(fb.euler313_quaternion)
-_multiply_parts = jit(quat.multiply_parts)
-_conjugate_parts = jit(quat.conjugate_parts)
-
-
-@jit
-def _invariants(I1, I2, I3, w1, w2, w3):
-    """fb.invariants (which calls fb.separatrix_gap, a Python function to numba)."""
-    d21, d32, d31 = I2 - I1, I3 - I2, I3 - I1
-    w1s, w2s, w3s = w1 * w1, w2 * w2, w3 * w3
-    Q1 = I1 * d31 * w1s + I2 * d32 * w2s
-    Q3 = I2 * d21 * w2s + I3 * d31 * w3s
-    D = _separatrix_gap(I1, I2, I3, w1, w3)
-    L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
-    return d21, d32, d31, Q1, Q3, D, L2
-
-
-_half_angles = jit(fb.half_angles)
-
-
-@jit
-def _half_theta(L1, L2, L3):
-    """fb.half_theta, float branch (its formulas: fb.half_angles, compiled)."""
-    if L1 == 0.0 and L2 == 0.0 and L3 == 0.0:
-        return math.nan, math.nan
-    h, o = _half_angles(L1, L2, L3)
-    if L3 >= 0:
-        return h, o
-    return o, h
+# branch chosen by isinstance; jit_formula compiles the helpers they call with them);
+# without numba, they are the functions themselves
+_separatrix_gap = jit_formula(fb.separatrix_gap)
+_jacobi_parameters = jit_formula(fb.jacobi_parameters)
+_kernel_moments = jit_formula(fb.kernel_moments)
+_kernel_vector = jit_formula(fb.kernel_vector)
+_euler313_quaternion = jit_formula(fb.euler313_quaternion)
+_multiply_parts = jit_formula(quat.multiply_parts)
+_conjugate_parts = jit_formula(quat.conjugate_parts)
+_invariants = jit_formula(fb.invariants)
+_half_theta = jit_formula(fb.half_theta_scalar)
 
 
 @jit

@@ -6,9 +6,25 @@ than the physics.  :func:`compile_torques` asks each model for its compiled form
 parameters and the paths or fields it reads, each with a ``compiled_parameters`` of its
 own) and lays the models out in three flat arrays, ``kinds`` (one formula per term),
 ``offsets`` (where each term's numbers start) and ``params`` (all the numbers);
-:func:`body_torque` evaluates their sum at one time, attitude and rate with the same
-formulas as the models' ``__call__``, in the same order of operations, so that the two
-agree to round-off.
+:func:`body_torque` evaluates their sum at one time, attitude and rate.
+
+One source per formula: the kernels write no formula of a model.  Each model's formula
+is a function of the model layer in component form, written on floats or arrays alike
+(:func:`~attitude.model.torques.gravity_gradient.gravity_gradient_torque`,
+``heavy_top_torque``, ``eddy_current_torque``, ``magnetic_dipole_torque``,
+``dissipation_torque``, the tilted dipole of :mod:`attitude.model.torques.fields`, the
+radiation pressure and drag of :mod:`attitude.model.torques.surface_forces`, the
+rotation :func:`attitude.foundations.quaternion.rotate_parts`, the shadow test of
+:mod:`attitude.model.shadow`, Kepler's equation of :mod:`attitude.model.orbit`): the
+model's ``evaluate`` runs it on arrays over time, and this module compiles it with
+:func:`~attitude.propagation.compiled.jit_formula` (:data:`FORMULAS`: each compiled name
+and its function).  What stays here is reading the numbers of ``params``, the facet
+sums (a loop, where numpy takes a matrix product: the one place where the two paths
+round differently, besides numpy's vectorised ``sin``/``cos``/``exp``) and, for paths
+and fields, the Keplerian position and velocity and the cubics' Horner rule (written as
+:meth:`attitude.model.orbit.KeplerOrbit.state` and
+:class:`attitude.environment.TimeTable` write them).  A new torque model is then its
+function, its ``compiled_parameters``, a term code and its layout here.
 
 ==========================  =============================================================
 term                        numbers from ``offsets[k] + 1``
@@ -17,7 +33,8 @@ term                        numbers from ``offsets[k] + 1``
 ``constant_body``           torque (3)
 ``constant_inertial``       torque (3)
 ``heavy_top``               ``m g``, up (3), pivot -> centre of mass (3)
-``eddy_current``            isotropic (0 or 1), scalar, tensor (9), field
+``eddy_current``            isotropic (0 or 1), scalar, tensor (9: an isotropic one's
+                            scalar times the identity, which the kernel uses), field
 ``magnetic_dipole``         moment (3), field
 ``dissipation``             ``k``, inertia (9)
 ``radiation_pressure``      time offset, pressure at 1 au, au, shadow (0 none, 1 conical,
@@ -65,11 +82,28 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..foundations.errors import InvalidStateError
+from ..foundations.quaternion import rotate_parts
 from ..model.body import RigidBody
 from ..model.orbit import solve_kepler_scalar
 from ..model.shadow import illumination_fraction
 from ..model.torques import TorqueModel
-from .compiled import NUMBA
+from ..model.torques.dissipation import dissipation_torque
+from ..model.torques.eddy_current import eddy_current_torque
+from ..model.torques.fields import dipole_direction, dipole_field
+from ..model.torques.gravity_gradient import gravity_gradient_torque
+from ..model.torques.heavy_top import heavy_top_torque
+from ..model.torques.magnetic_dipole import magnetic_dipole_torque
+from ..model.torques.surface_forces import (
+    corotating_air,
+    drag_pressure,
+    drag_torque,
+    exponential_density,
+    facing,
+    radiation_torque,
+    radiation_weights,
+    sunlight,
+)
+from .compiled import NUMBA, jit_formula
 from .compiled import jit as _jit
 
 __all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_KINDS"]
@@ -92,9 +126,33 @@ _UNIFORM, _DIPOLE = 0.0, 1.0
 # --- kernels ----------------------------------------------------------------------------
 
 
-#: :func:`attitude.model.orbit.solve_kepler` for one ``M``: the scalar form of its iteration,
-#: compiled (one solver for the Python and the compiled torques).
-_eccentric_anomaly = _jit(solve_kepler_scalar)
+#: The formulas of the models, compiled from their one source (module notes): each kernel
+#: below is ``jit_formula(f)`` of the function ``f`` the model's ``evaluate`` calls.
+FORMULAS = {
+    "_eccentric_anomaly": solve_kepler_scalar,     # attitude.model.orbit.solve_kepler
+    "_illumination_fraction": illumination_fraction,
+    "_to_body": rotate_parts,
+    "_gravity_gradient": gravity_gradient_torque,
+    "_heavy_top": heavy_top_torque,
+    "_eddy_current": eddy_current_torque,
+    "_magnetic_dipole": magnetic_dipole_torque,
+    "_dissipation": dissipation_torque,
+    "_dipole_direction": dipole_direction,
+    "_dipole_field": dipole_field,
+    "_sunlight": sunlight,
+    "_facing": facing,
+    "_radiation_weights": radiation_weights,
+    "_radiation_torque": radiation_torque,
+    "_corotating_air": corotating_air,
+    "_exponential_density": exponential_density,
+    "_drag_pressure": drag_pressure,
+    "_drag_torque": drag_torque,
+}
+(_eccentric_anomaly, _illumination_fraction, _to_body, _gravity_gradient, _heavy_top,
+ _eddy_current, _magnetic_dipole, _dissipation, _dipole_direction, _dipole_field,
+ _sunlight, _facing, _radiation_weights, _radiation_torque, _corotating_air,
+ _exponential_density, _drag_pressure, _drag_torque) = (jit_formula(f)
+                                                        for f in FORMULAS.values())
 
 
 @_jit
@@ -169,29 +227,27 @@ def _velocity(params, i, t):
     return _piecewise_rate(params, i + 1, t)
 
 
-#: The shadow test of attitude.model.shadow (its one source), compiled: the model code 1
-#: is conical, 2 cylindrical.
-_illumination_fraction = _jit(illumination_fraction)
+@_jit
+def _three(params, i):
+    """The three numbers at ``params[i]``, as a tuple."""
+    return params[i], params[i + 1], params[i + 2]
 
 
 @_jit
-def _radiation(params, i, t, qx, qy, qz, qw):
+def _radiation(params, i, t, q):
     """Solar radiation pressure (:class:`attitude.environment.SolarRadiationPressure`):
-    ``-P [(sum_k w_k r_k) x s + 2 sum_k u_k (r_k x n_k)]``."""
+    the formulas of :mod:`attitude.model.torques.surface_forces`, the facet sums in a loop."""
     t = t + params[i]
     n = int(params[i + 6])
-    sx, sy, sz = _position(params, int(params[i + 7]), t)
-    x, y, z = _position(params, int(params[i + 8]), t)
-    dx, dy, dz = sx - x, sy - y, sz - z
-    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-    ratio = params[i + 2] / dist
-    p = params[i + 1] * (ratio * ratio)
+    sun = _position(params, int(params[i + 7]), t)
+    here = _position(params, int(params[i + 8]), t)
+    p, s_in = _sunlight(params[i + 1], params[i + 2], sun, here)
     if params[i + 3] != 0.0:
-        p *= _illumination_fraction(x, y, z, sx, sy, sz, params[i + 3] != 2.0,
-                                    params[i + 4], params[i + 5])
-    if p == 0.0:
+        p *= _illumination_fraction(here[0], here[1], here[2], sun[0], sun[1], sun[2],
+                                    params[i + 3] != 2.0, params[i + 4], params[i + 5])
+    if p == 0.0:                                # in the umbra: no facet sums
         return 0.0, 0.0, 0.0
-    s0, s1, s2 = _to_body(qx, qy, qz, qw, dx / dist, dy / dist, dz / dist)
+    s = _to_body(q, s_in, True)
     normals = i + 9
     r = normals + 3 * n
     rxn = r + 3 * n
@@ -200,57 +256,53 @@ def _radiation(params, i, t, qx, qy, qz, qw):
     diff = spec + n
     W0 = W1 = W2 = U0 = U1 = U2 = 0.0
     for k in range(n):
-        c = (params[normals + 3 * k] * s0 + params[normals + 3 * k + 1] * s1
-             + params[normals + 3 * k + 2] * s2)
-        if c > 0.0:
-            w = c * params[one_minus_s + k]
-            u = c * (c * params[spec + k] + params[diff + k])
+        c = _facing(_three(params, normals + 3 * k), s)
+        if c > 0.0:                             # a facet facing away adds nothing
+            w, u = _radiation_weights(c, params[one_minus_s + k], params[spec + k],
+                                      params[diff + k])
             W0 += w * params[r + 3 * k]
             W1 += w * params[r + 3 * k + 1]
             W2 += w * params[r + 3 * k + 2]
             U0 += u * params[rxn + 3 * k]
             U1 += u * params[rxn + 3 * k + 1]
             U2 += u * params[rxn + 3 * k + 2]
-    return (-p * ((W1 * s2 - W2 * s1) + 2.0 * U0), -p * ((W2 * s0 - W0 * s2) + 2.0 * U1),
-            -p * ((W0 * s1 - W1 * s0) + 2.0 * U2))
+    return _radiation_torque(p, (W0, W1, W2), (U0, U1, U2), s)
 
 
 @_jit
-def _drag(params, i, t, qx, qy, qz, qw):
-    """Free-molecular drag (:class:`attitude.environment.AerodynamicDrag`):
-    ``-1/2 rho v^2 C_D (sum_k A_k c_k r_k) x v_hat``, the air co-rotating."""
+def _drag(params, i, t, q):
+    """Free-molecular drag (:class:`attitude.environment.AerodynamicDrag`): the formulas
+    of :mod:`attitude.model.torques.surface_forces`, the facet sum in a loop."""
     t = t + params[i]
     layers, n = int(params[i + 5]), int(params[i + 6])
     orbit = int(params[i + 7])
     x, y, z = _position(params, orbit, t)
-    vx, vy, vz = _velocity(params, orbit, t)
+    v = _velocity(params, orbit, t)
     if params[i + 2] != 0.0:
-        rate = params[i + 3]
-        vx, vy = vx + rate * y, vy - rate * x
+        v = _corotating_air(params[i + 3], (x, y, z), v)
     h = math.sqrt(x * x + y * y + z * z) - params[i + 4]
     bases = i + 8
     k = 0                              # the last layer whose base is <= h (or the first)
     while k + 1 < layers and params[bases + k + 1] <= h:
         k += 1
-    rho = params[bases + layers + k] * math.exp(-(h - params[bases + k])
-                                                / params[bases + 2 * layers + k])
+    rho = _exponential_density(h, params[bases + k], params[bases + layers + k],
+                               params[bases + 2 * layers + k])
+    vx, vy, vz = v
     v2 = vx * vx + vy * vy + vz * vz
-    if v2 == 0.0 or rho == 0.0:
+    if v2 == 0.0 or rho == 0.0:                 # no flow: no direction
         return 0.0, 0.0, 0.0
     speed = math.sqrt(v2)
-    v0, v1, v2h = _to_body(qx, qy, qz, qw, vx / speed, vy / speed, vz / speed)
+    v_hat = _to_body(q, (vx / speed, vy / speed, vz / speed), True)
     normals = bases + 3 * layers
     ar = normals + 3 * n
     S0 = S1 = S2 = 0.0
     for j in range(n):
-        c = (params[normals + 3 * j] * v0 + params[normals + 3 * j + 1] * v1
-             + params[normals + 3 * j + 2] * v2h)
-        if c > 0.0:
+        c = _facing(_three(params, normals + 3 * j), v_hat)
+        if c > 0.0:                             # a facet facing away adds nothing
             S0 += c * params[ar + 3 * j]
             S1 += c * params[ar + 3 * j + 1]
             S2 += c * params[ar + 3 * j + 2]
-    f = -0.5 * rho * v2 * params[i + 1]
-    return f * (S1 * v2h - S2 * v1), f * (S2 * v0 - S0 * v2h), f * (S0 * v1 - S1 * v0)
+    return _drag_torque(_drag_pressure(rho, v2, params[i + 1]), (S0, S1, S2), v_hat)
 
 
 @_jit
@@ -275,45 +327,16 @@ def _position(params, i, t):
 
 @_jit
 def _field(params, i, t):
-    """The field block at ``params[i]`` at ``t``: inertial field, T (as
-    :class:`attitude.model.torques.TiltedDipoleField`:
-    ``B = mu0 m / (4 pi r^3) (3 (m_hat . r_hat) r_hat - m_hat)``)."""
+    """The field block at ``params[i]`` at ``t``: inertial field, T (the tilted dipole by
+    the formulas of :mod:`attitude.model.torques.fields`)."""
     kind = params[i]
     if kind == _UNIFORM:
         return params[i + 1], params[i + 2], params[i + 3]
     if kind == _DIPOLE:
-        coefficient, st, ct = params[i + 1], params[i + 2], params[i + 3]
         lam = (params[i + 4] + params[i + 5] * t) + params[i + 6]
-        mx, my, mz = -(st * math.cos(lam)), -(st * math.sin(lam)), -ct
-        rx, ry, rz = _position(params, int(params[i + 7]), t)
-        r2 = rx * rx + ry * ry + rz * rz
-        rn = math.sqrt(r2)
-        hx, hy, hz = rx / rn, ry / rn, rz / rn
-        scale = coefficient / (r2 * rn)
-        d3 = 3.0 * (mx * hx + my * hy + mz * hz)
-        return (scale * (d3 * hx - mx), scale * (d3 * hy - my), scale * (d3 * hz - mz))
+        m_hat = _dipole_direction(params[i + 2], params[i + 3], lam)
+        return _dipole_field(params[i + 1], m_hat, _position(params, int(params[i + 7]), t))
     return _piecewise(params, i + 1, t)
-
-
-@_jit
-def _to_body(qx, qy, qz, qw, vx, vy, vz):
-    """``v`` rotated by the inverse of ``q`` (inertial -> body), as
-    :func:`attitude.foundations.quaternion.rotate_parts` with ``inverse=True``."""
-    ux, uy, uz = -qx, -qy, -qz
-    tx = 2.0 * (uy * vz - uz * vy)
-    ty = 2.0 * (uz * vx - ux * vz)
-    tz = 2.0 * (ux * vy - uy * vx)
-    return (vx + qw * tx + uy * tz - uz * ty,
-            vy + qw * ty + uz * tx - ux * tz,
-            vz + qw * tz + ux * ty - uy * tx)
-
-
-@_jit
-def _matvec(params, i, x, y, z):
-    """The row-major 3 x 3 matrix at ``params[i]`` times ``(x, y, z)``."""
-    return (params[i] * x + params[i + 1] * y + params[i + 2] * z,
-            params[i + 3] * x + params[i + 4] * y + params[i + 5] * z,
-            params[i + 6] * x + params[i + 7] * y + params[i + 8] * z)
 
 
 @_jit
@@ -349,8 +372,8 @@ def body_torque(kinds, offsets, params, t0, q_b, w_b, out):
     array([ 0.   ,  0.   , -0.001])
     """
     norm = math.sqrt(q_b[0] * q_b[0] + q_b[1] * q_b[1] + q_b[2] * q_b[2] + q_b[3] * q_b[3])
-    qx, qy, qz, qw = q_b[0] / norm, q_b[1] / norm, q_b[2] / norm, q_b[3] / norm
-    w0, w1, w2 = w_b[0], w_b[1], w_b[2]
+    q = (q_b[0] / norm, q_b[1] / norm, q_b[2] / norm, q_b[3] / norm)
+    w = (w_b[0], w_b[1], w_b[2])
     out[0] = 0.0
     out[1] = 0.0
     out[2] = 0.0
@@ -358,59 +381,31 @@ def body_torque(kinds, offsets, params, t0, q_b, w_b, out):
         kind = kinds[k]
         t = t0 + params[offsets[k]]             # the term's time shift
         i = offsets[k] + 1
-        if kind == _GRAVITY_GRADIENT:           # 3 mu / r^5 (r_b x I r_b)
-            rx, ry, rz = _position(params, int(params[i + 10]), t)
-            bx, by, bz = _to_body(qx, qy, qz, qw, rx, ry, rz)
-            r2 = bx * bx + by * by + bz * bz
-            ix, iy, iz = _matvec(params, i + 1, bx, by, bz)
-            f = 3.0 * params[i] / (r2 * r2 * math.sqrt(r2))
-            m0, m1, m2 = f * (by * iz - bz * iy), f * (bz * ix - bx * iz), \
-                f * (bx * iy - by * ix)
+        if kind == _GRAVITY_GRADIENT:
+            r = _to_body(q, _position(params, int(params[i + 10]), t), True)
+            m = _gravity_gradient(params[i], params[i + 1:i + 10], r)
         elif kind == _CONSTANT_BODY:
-            m0, m1, m2 = params[i], params[i + 1], params[i + 2]
+            m = _three(params, i)
         elif kind == _CONSTANT_INERTIAL:
-            m0, m1, m2 = _to_body(qx, qy, qz, qw, params[i], params[i + 1], params[i + 2])
-        elif kind == _HEAVY_TOP:                # m g (u_b x l)
-            ux, uy, uz = _to_body(qx, qy, qz, qw, params[i + 1], params[i + 2],
-                                  params[i + 3])
-            lx, ly, lz = params[i + 4], params[i + 5], params[i + 6]
-            mg = params[i]
-            m0, m1, m2 = mg * (uy * lz - uz * ly), mg * (uz * lx - ux * lz), \
-                mg * (ux * ly - uy * lx)
-        elif kind == _EDDY:                     # (M (w x B_b)) x B_b
-            fx, fy, fz = _field(params, int(params[i + 11]), t)
-            bx, by, bz = _to_body(qx, qy, qz, qw, fx, fy, fz)
-            x0, x1, x2 = w1 * bz - w2 * by, w2 * bx - w0 * bz, w0 * by - w1 * bx
-            if params[i] != 0.0:
-                s = params[i + 1]
-                y0, y1, y2 = s * x0, s * x1, s * x2
-            else:
-                y0, y1, y2 = _matvec(params, i + 2, x0, x1, x2)
-            m0, m1, m2 = y1 * bz - y2 * by, y2 * bx - y0 * bz, y0 * by - y1 * bx
-        elif kind == _MAGNETIC_DIPOLE:          # m x B_b
-            fx, fy, fz = _field(params, int(params[i + 3]), t)
-            bx, by, bz = _to_body(qx, qy, qz, qw, fx, fy, fz)
-            mx, my, mz = params[i], params[i + 1], params[i + 2]
-            m0, m1, m2 = my * bz - mz * by, mz * bx - mx * bz, mx * by - my * bx
+            m = _to_body(q, _three(params, i), True)
+        elif kind == _HEAVY_TOP:
+            m = _heavy_top(params[i], _to_body(q, _three(params, i + 1), True),
+                           _three(params, i + 4))
+        elif kind == _EDDY:                     # the tensor (an isotropic one's too)
+            b = _to_body(q, _field(params, int(params[i + 11]), t), True)
+            m = _eddy_current(params[i + 2:i + 11], w, b)
+        elif kind == _MAGNETIC_DIPOLE:
+            b = _to_body(q, _field(params, int(params[i + 3]), t), True)
+            m = _magnetic_dipole(_three(params, i), b)
         elif kind == _RADIATION:
-            m0, m1, m2 = _radiation(params, i, t, qx, qy, qz, qw)
+            m = _radiation(params, i, t, q)
         elif kind == _DRAG:
-            m0, m1, m2 = _drag(params, i, t, qx, qy, qz, qw)
-        else:                                   # dissipation: -k w_perp (to L = I w)
-            Lx, Ly, Lz = _matvec(params, i + 1, w0, w1, w2)
-            L2 = Lx * Lx + Ly * Ly + Lz * Lz
-            if L2 == 0.0:
-                m0, m1, m2 = 0.0, 0.0, 0.0
-            else:
-                c = (w0 * Lx + w1 * Ly + w2 * Lz) / L2
-                p0, p1, p2 = w0 - c * Lx, w1 - c * Ly, w2 - c * Lz
-                c = (p0 * Lx + p1 * Ly + p2 * Lz) / L2     # re-project (round-off)
-                p0, p1, p2 = p0 - c * Lx, p1 - c * Ly, p2 - c * Lz
-                nk = -params[i]
-                m0, m1, m2 = nk * p0, nk * p1, nk * p2
-        out[0] += m0
-        out[1] += m1
-        out[2] += m2
+            m = _drag(params, i, t, q)
+        else:
+            m = _dissipation(params[i], params[i + 1:i + 10], w)
+        out[0] += m[0]
+        out[1] += m[1]
+        out[2] += m[2]
 
 
 # --- layout -----------------------------------------------------------------------------

@@ -1,12 +1,13 @@
 """The compiled torque models (attitude.propagation.compiled_torques) against the models'
 own Python calls.
 
-The second method is the model itself: ``body_torque`` repeats each model's formulas in
-the same order of operations (Kepler's equation by the same iteration, the tabulated
-orbits, Sun and IGRF by the same cubics), so the two differ only where a library function
-rounds differently (numpy's SIMD ``sin``/``cos`` and ``dot`` against libm and a plain
-sum): :data:`tests.tolerances.TORQUE_EVAL` ulps of the scale of the terms, times what
-the time-dependent inputs amplify an ulp by (see ``_models``: the Kepler solve, the
+The second method is the model itself: ``body_torque`` compiles each model's own formula
+(one source: tests/propagation/test_formula_sources.py), reads Kepler's equation by the
+same iteration and the tabulated orbits, Sun and IGRF by the same cubics, so the two
+differ only where a library function rounds differently (numpy's SIMD ``sin``/``cos``/
+``exp`` against libm, a matrix product against a plain sum over facets):
+:data:`tests.tolerances.TORQUE_EVAL` ulps of the scale of the terms, times what the
+time-dependent inputs amplify an ulp by (see ``_models``: the Kepler solve, the
 dipole's angle, the lit fraction in the penumbra, the density's exponential).  Each
 comparison runs on the numba-compiled kernel, on its ``py_func`` (the loop in Python,
 calling the compiled helpers) and, in a subprocess with ``ATTITUDE_NO_NUMBA=1``, on the

@@ -84,6 +84,46 @@ def matvec(inertia: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("...ij,...j->...i", inertia, v)
 
 
+def matvec_parts(m, v) -> tuple:
+    """``M v`` in component form: ``m`` the nine entries of ``M`` row-major (any indexable:
+    a tuple of floats or of arrays, a slice of the compiled kernels' ``params``), ``v``
+    the components ``(x, y, z)`` (floats or arrays).  The one source of the products of a
+    tensor and a vector in the torque formulas (numba compiles it on floats)."""
+    x, y, z = v
+    return (m[0] * x + m[1] * y + m[2] * z,
+            m[3] * x + m[4] * y + m[5] * z,
+            m[6] * x + m[7] * y + m[8] * z)
+
+
+def dot_parts(a, b):
+    """``a . b`` in component form (floats or arrays), summed in order ``x, y, z``."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def parts(v: np.ndarray) -> tuple:
+    """The components ``(x, y, z)`` of ``(..., 3)`` vectors: plain floats for one vector
+    (a formula on floats is ~10x faster than numpy on three elements), else arrays."""
+    if v.ndim == 1:
+        return tuple(v.tolist())
+    return (v[..., 0], v[..., 1], v[..., 2])
+
+
+def entries(matrix: np.ndarray) -> tuple:
+    """The nine entries of ``(..., 3, 3)`` matrices, row-major (floats for one matrix),
+    as :func:`matvec_parts` takes them."""
+    if matrix.ndim == 2:
+        return tuple(matrix.ravel().tolist())
+    return tuple(matrix[..., i, j] for i in range(3) for j in range(3))
+
+
+def stacked(components) -> np.ndarray:
+    """``(..., 3)`` vectors from their components (floats or arrays that broadcast)."""
+    x, y, z = components
+    if np.ndim(x) == 0 and np.ndim(y) == 0 and np.ndim(z) == 0:
+        return np.array([x, y, z], dtype=float)
+    return np.stack(np.broadcast_arrays(x, y, z), axis=-1)
+
+
 def orbit_rate(path) -> float:
     """Largest angular rate of the body's position about the primary, rad/s (at
     periapsis for a Keplerian orbit, at ``t = 0`` for a path with a velocity, else 0)."""

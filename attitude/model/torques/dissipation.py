@@ -11,9 +11,38 @@ from astropy import units as u
 from ...foundations.errors import TorqueConfigError
 from ..body import SYMMETRY_RTOL, RigidBody
 from .base import TorqueModel
-from .common import dot, inertia_of, matvec, moments_of, si_positive
+from .common import (
+    dot_parts,
+    entries,
+    inertia_of,
+    matvec_parts,
+    moments_of,
+    parts,
+    si_positive,
+    stacked,
+)
 
 __all__ = ["EnergyDissipation", "damping_timescale"]
+
+
+def dissipation_torque(k, inertia, w) -> tuple:
+    """``-k w_perp``, body frame, N m, in component form: ``w_perp`` the part of the
+    rate ``w`` normal to ``L = I w``, projected out twice (the second pass removes the
+    rounding error of the first, so that ``L . M`` vanishes to the last bit).  The one
+    source of the formula (:meth:`EnergyDissipation.evaluate`, the compiled kernel of
+    :mod:`attitude.propagation.compiled_torques`).
+
+    ``k`` (kg m^2/s), ``inertia`` the nine entries of ``I`` row-major, ``w`` (rad/s);
+    floats or arrays that broadcast.  A body at rest (``L^2 = 0``) gets ``-k w``, zero.
+    """
+    L = matvec_parts(inertia, w)
+    L2 = dot_parts(L, L)
+    safe = L2 + (L2 == 0.0)             # 1 where L = 0 (floats and arrays alike)
+    c = dot_parts(w, L) / safe
+    p0, p1, p2 = w[0] - c * L[0], w[1] - c * L[1], w[2] - c * L[2]
+    c = dot_parts((p0, p1, p2), L) / safe
+    nk = -k
+    return nk * (p0 - c * L[0]), nk * (p1 - c * L[1]), nk * (p2 - c * L[2])
 
 
 class EnergyDissipation(TorqueModel):
@@ -167,22 +196,7 @@ class EnergyDissipation(TorqueModel):
 
     def evaluate(self, t, quaternion, omega_body, body):
         k = self.coefficient(body)
-        L = matvec(inertia_of(body), omega_body)
-        if L.ndim == 1:                                 # one epoch
-            L2 = float(np.dot(L, L))
-            if L2 == 0.0:
-                return np.zeros(3)
-            w_perp = omega_body - (np.dot(omega_body, L) / L2) * L
-            w_perp = w_perp - (np.dot(w_perp, L) / L2) * L    # re-project (round-off)
-            return -k * w_perp
-        k = np.asarray(k)[..., None]
-        L2 = dot(L, L)[..., None]
-        safe = np.where(L2 > 0, L2, 1.0)
-        w_perp = omega_body - dot(omega_body, L)[..., None] / safe * L
-        # re-project once: removes the rounding error of the projection along L, so that
-        # L . M vanishes to the last bit
-        w_perp = w_perp - dot(w_perp, L)[..., None] / safe * L
-        return -k * w_perp
+        return stacked(dissipation_torque(k, entries(inertia_of(body)), parts(omega_body)))
 
     def characteristic_rate(self, t, quaternion, omega_body, body) -> float:
         """``1 / time_constant``, rad/s."""

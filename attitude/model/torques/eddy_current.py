@@ -6,11 +6,33 @@ import numpy as np
 
 from ...foundations import quaternion as quat
 from ...foundations.errors import TorqueConfigError
+from ...foundations.quaternion import cross_parts
 from .base import TorqueModel
-from .common import dot, moments_of, orbit_rate, si_positive, si_value
+from .common import (
+    dot,
+    matvec_parts,
+    moments_of,
+    orbit_rate,
+    parts,
+    si_positive,
+    si_value,
+    stacked,
+)
 from .fields import UniformField, shifted_field
 
 __all__ = ["EddyCurrentDamping"]
+
+
+def eddy_current_torque(tensor, w, b) -> tuple:
+    """``(M (w x B)) x B``, body frame, N m, in component form: the one source of the
+    formula (:meth:`EddyCurrentDamping.evaluate`, the compiled kernel of
+    :mod:`attitude.propagation.compiled_torques`).
+
+    ``tensor`` the nine entries of the magnetic tensor row-major (S m^4; an isotropic
+    one is its scalar times the identity), ``w`` the rate (rad/s) and ``b`` the field
+    (T), body axes; floats or arrays that broadcast.
+    """
+    return cross_parts(matvec_parts(tensor, cross_parts(w, b)), b)
 
 
 class EddyCurrentDamping(TorqueModel):
@@ -95,6 +117,8 @@ class EddyCurrentDamping(TorqueModel):
             raise TorqueConfigError(f"expected a scalar or a 3x3 tensor, "
                                     f"got shape {tensor.shape}", key="magnetic_tensor")
         self.magnetic_tensor = tensor
+        full = float(tensor) * np.eye(3) if self.isotropic else tensor
+        self._entries = tuple(full.ravel().tolist())        # row-major, for the formula
         if callable(field):
             self.field = field
         else:
@@ -166,9 +190,7 @@ class EddyCurrentDamping(TorqueModel):
 
     def evaluate(self, t, quaternion, omega_body, body):
         B = quat.rotate(quaternion, np.asarray(self.field(t), dtype=float), inverse=True)
-        x = quat.cross(omega_body, B)
-        Mx = self.magnetic_tensor * x if self.isotropic else x @ self.magnetic_tensor.T
-        return quat.cross(Mx, B)
+        return stacked(eddy_current_torque(self._entries, parts(omega_body), parts(B)))
 
     def __repr__(self) -> str:
         m = (f"{float(self.magnetic_tensor):.6g}" if self.isotropic

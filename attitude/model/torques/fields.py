@@ -13,9 +13,33 @@ from ...foundations.constants import (
     MU0_OVER_4PI,
 )
 from ..orbit import KeplerOrbit, as_path
-from .common import advance, dot, si_positive, si_value
+from .common import advance, parts, si_positive, si_value, stacked
 
 __all__ = ["UniformField", "TiltedDipoleField", "shifted_field"]
+
+
+def dipole_direction(sin_tilt, cos_tilt, longitude) -> tuple:
+    """The unit dipole moment (pointing south) whose northern pole is at colatitude
+    ``tilt`` and inertial longitude ``longitude`` (rad), component form: the one source
+    (:meth:`TiltedDipoleField.dipole_direction`, the compiled kernel of
+    :mod:`attitude.propagation.compiled_torques`); floats or arrays."""
+    return (-(sin_tilt * np.cos(longitude)), -(sin_tilt * np.sin(longitude)),
+            -cos_tilt)
+
+
+def dipole_field(coefficient, m_hat, r) -> tuple:
+    """``mu0 m / (4 pi r^3) (3 (m_hat . r_hat) r_hat - m_hat)``, T, component form
+    (``coefficient = mu0 m / 4 pi``, ``m_hat`` the unit moment, ``r`` the position, m):
+    the one source (:class:`TiltedDipoleField`, the compiled kernel of
+    :mod:`attitude.propagation.compiled_torques`); floats or arrays that broadcast."""
+    x, y, z = r
+    mx, my, mz = m_hat
+    r2 = x * x + y * y + z * z
+    rn = np.sqrt(r2)
+    hx, hy, hz = x / rn, y / rn, z / rn
+    scale = coefficient / (r2 * rn)
+    d3 = 3.0 * (mx * hx + my * hy + mz * hz)
+    return scale * (d3 * hx - mx), scale * (d3 * hy - my), scale * (d3 * hz - mz)
 
 
 class UniformField:
@@ -112,21 +136,18 @@ class TiltedDipoleField:
 
     def dipole_direction(self, t) -> np.ndarray:
         """Unit vector of the dipole moment (pointing south), inertial, ``S + (3,)``."""
-        theta = self.rotation_angle + self.rotation_rate * np.asarray(t, dtype=float)
-        lam = theta + self.pole_longitude
-        st = np.sin(self.tilt)
-        return -np.stack([st * np.cos(lam), st * np.sin(lam),
-                          np.broadcast_to(np.cos(self.tilt), np.shape(lam))], axis=-1)
+        return stacked(self._direction(np.asarray(t, dtype=float)))
+
+    def _direction(self, t) -> tuple:
+        lam = (self.rotation_angle + self.rotation_rate * t) + self.pole_longitude
+        return dipole_direction(float(np.sin(self.tilt)), float(np.cos(self.tilt)), lam)
 
     def __call__(self, t) -> np.ndarray:
         """Field at the body, inertial components, T, shape ``S + (3,)``."""
-        r = self.orbit.position(t)
-        m_hat = self.dipole_direction(t)
-        r2 = dot(r, r)[..., None]
-        rn = np.sqrt(r2)
-        r_hat = r / rn
-        return MU0_OVER_4PI * self.moment / (r2 * rn) * (
-            3.0 * dot(m_hat, r_hat)[..., None] * r_hat - m_hat)
+        t = np.asarray(t, dtype=float)
+        r = np.asarray(self.orbit.position(t), dtype=float)
+        m_hat = self._direction(float(t) if t.ndim == 0 else t)
+        return stacked(dipole_field(MU0_OVER_4PI * self.moment, m_hat, parts(r)))
 
     def compiled_parameters(self, t_span=None) -> tuple[str, dict]:
         """``("tilted_dipole", {...})``: the field as numbers for a compiled kernel, the

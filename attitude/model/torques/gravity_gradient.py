@@ -8,20 +8,40 @@ import numpy as np
 
 from ...foundations import quaternion as quat
 from ...foundations.errors import TorqueConfigError
+from ...foundations.quaternion import cross_parts
 from ..orbit import KeplerOrbit, as_path
 from .base import TorqueModel
 from .common import (
     advance,
     dot,
+    entries,
     inertia_of,
     matvec,
+    matvec_parts,
     min_radius,
     orbit_rate,
+    parts,
     si_positive,
+    stacked,
     unit_quaternion,
 )
 
 __all__ = ["GravityGradient"]
+
+
+def gravity_gradient_torque(mu, inertia, r) -> tuple:
+    """``3 mu / r^5 (r x I r)``, body frame, N m, in component form: the one source of
+    the formula (:meth:`GravityGradient.evaluate` on arrays over time, the compiled
+    kernel of :mod:`attitude.propagation.compiled_torques` on floats).
+
+    ``mu`` (m^3/s^2), ``inertia`` the nine entries of ``I`` row-major (kg m^2), ``r`` the
+    position ``(x, y, z)`` in body axes (m); floats or arrays that broadcast.
+    """
+    x, y, z = r
+    r2 = x * x + y * y + z * z
+    f = 3.0 * mu / (r2 * r2 * np.sqrt(r2))
+    m0, m1, m2 = cross_parts(r, matvec_parts(inertia, r))
+    return f * m0, f * m1, f * m2
 
 
 class GravityGradient(TorqueModel):
@@ -96,11 +116,9 @@ class GravityGradient(TorqueModel):
         self.mu = si_positive(mu, "m3/s2", "mu")
 
     def evaluate(self, t, quaternion, omega_body, body):
-        r = self.orbit.position(t)
-        r_b = quat.rotate(quaternion, r, inverse=True)
-        r2 = dot(r_b, r_b)[..., None]
-        Ir = matvec(inertia_of(body), r_b)
-        return 3.0 * self.mu / (r2 * r2 * np.sqrt(r2)) * quat.cross(r_b, Ir)
+        r_b = quat.rotate(quaternion, self.orbit.position(t), inverse=True)
+        return stacked(gravity_gradient_torque(self.mu, entries(inertia_of(body)),
+                                               parts(r_b)))
 
     def characteristic_rate(self, t, quaternion, omega_body, body) -> float:
         """``max(sqrt(3 mu / r_p^3), orbital rate at periapsis)``, rad/s: the libration

@@ -7,10 +7,23 @@ import numpy as np
 from ...foundations import quaternion as quat
 from ...foundations.constants import STANDARD_GRAVITY
 from ...foundations.errors import TorqueConfigError
+from ...foundations.quaternion import cross_parts
 from .base import TorqueModel
-from .common import inertia_of, mass_of, si_positive, si_value
+from .common import inertia_of, mass_of, parts, si_positive, si_value, stacked
 
 __all__ = ["HeavyTopPivot"]
+
+
+def heavy_top_torque(mg, up, lever) -> tuple:
+    """``m g (u_b x l)``, body frame, N m, in component form: the one source of the
+    formula (:meth:`HeavyTopPivot.evaluate`, the compiled kernel of
+    :mod:`attitude.propagation.compiled_torques`).
+
+    ``mg`` the weight (N), ``up`` the inertial up direction in body axes, ``lever`` the
+    pivot -> centre of mass vector (body, m); floats or arrays that broadcast.
+    """
+    m0, m1, m2 = cross_parts(up, lever)
+    return mg * m0, mg * m1, mg * m2
 
 
 class HeavyTopPivot(TorqueModel):
@@ -80,7 +93,9 @@ class HeavyTopPivot(TorqueModel):
             raise TorqueConfigError("the body has no mass: give HeavyTopPivot a "
                                     "mass, or build the body with one", key="mass")
         up_b = quat.rotate(quaternion, self.up, inverse=True)
-        return np.asarray(mass)[..., None] * self.g * quat.cross(up_b, self.pivot_to_com)
+        mg = np.asarray(mass, dtype=float) * self.g                 # (n,) for n bodies
+        mg = float(mg) if mg.ndim == 0 else mg
+        return stacked(heavy_top_torque(mg, parts(up_b), tuple(self.pivot_to_com.tolist())))
 
     def characteristic_rate(self, t, quaternion, omega_body, body):
         """``sqrt(m g |l| / I_swing)``, rad/s: the small-swing pendulum frequency

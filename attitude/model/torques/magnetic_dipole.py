@@ -6,11 +6,22 @@ import numpy as np
 
 from ...foundations import quaternion as quat
 from ...foundations.errors import TorqueConfigError
+from ...foundations.quaternion import cross_parts
 from .base import TorqueModel
-from .common import dot, moments_of, orbit_rate, si_value, unit_quaternion
+from .common import dot, moments_of, orbit_rate, parts, si_value, stacked, unit_quaternion
 from .fields import UniformField, shifted_field
 
 __all__ = ["MagneticDipole"]
+
+
+def magnetic_dipole_torque(moment, b) -> tuple:
+    """``m x B``, body frame, N m, in component form: the one source of the formula
+    (:meth:`MagneticDipole.evaluate`, the compiled kernel of
+    :mod:`attitude.propagation.compiled_torques`).
+
+    ``moment`` (A m^2) and ``b`` (T), body axes; floats or arrays that broadcast.
+    """
+    return cross_parts(moment, b)
 
 
 class MagneticDipole(TorqueModel):
@@ -75,7 +86,7 @@ class MagneticDipole(TorqueModel):
 
     def evaluate(self, t, quaternion, omega_body, body):
         B = quat.rotate(quaternion, np.asarray(self.field(t), dtype=float), inverse=True)
-        return quat.cross(self.moment, B)
+        return stacked(magnetic_dipole_torque(tuple(self.moment.tolist()), parts(B)))
 
     def potential(self, t, quaternion, body=None) -> np.ndarray:
         """Magnetic potential energy ``V = -m . B_b``, J: lowest with ``m`` along ``B``.
