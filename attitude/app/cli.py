@@ -20,6 +20,7 @@ import os
 import sys
 import traceback
 
+from ..foundations import progress
 from ..foundations.errors import AttitudeError, PropagationError
 from ..version import __version__
 from .commands.common import (
@@ -32,6 +33,25 @@ from .commands.common import (
 
 __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_EXPECTATION", "EXIT_INPUT",
            "EXIT_PROPAGATION"]
+
+#: Command name -> the suffixes its output path (``-o``, or ``OUT`` of convert) may end
+#: in, with what each writes; any other suffix is bad input (exit 2), not a netCDF file
+#: under a misleading name.
+OUTPUT_SUFFIXES = {
+    "run": {".nc": "netCDF ephemeris"},
+    "lightcurve": {".nc": "netCDF lightcurve"},
+    "section": {".nc": "netCDF surface of section"},
+    "fit": {".toml": "fitted scenario"},
+    "convert": {".nc": "netCDF", ".aem": "CCSDS AEM, KVN", ".kvn": "CCSDS AEM, KVN",
+                ".xml": "CCSDS AEM, XML", ".bc": "SPICE C-kernel"},
+}
+
+#: The exit code when stdout is closed before the command is done (``attitude check
+#: scenarios/ | head -1``): 128 + SIGPIPE, what the shell reports for a command killed
+#: by SIGPIPE (cat, grep, ...), so that ``set -o pipefail`` tells the truth: the
+#: command did not finish (``check`` may not have checked every scenario).  No message
+#: and no traceback: the reader left on purpose.
+EXIT_BROKEN_PIPE = 128 + 13
 
 #: Command name -> the module that runs it (its ``command(args) -> int``), imported when
 #: the command runs (never for ``--help``).
@@ -292,6 +312,34 @@ def _error_line(exc: Exception, file: str | None) -> str:
     return f"attitude: error: {text}"
 
 
+def _bad_output(args) -> str | None:
+    """The error line of an output path whose suffix the command cannot write."""
+    accepted = OUTPUT_SUFFIXES.get(args.command)
+    path = getattr(args, "output", None)
+    if accepted is None or path is None:
+        return None
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix in accepted:
+        return None
+    option = "OUT" if args.command == "convert" else "-o"
+    kinds = ", ".join(f"{s} ({what})" for s, what in accepted.items())
+    return (f"attitude: error: {path}: {option}: 'attitude {args.command}' cannot write "
+            f"{'a file without a suffix' if not suffix else repr(suffix) + ' files'}; "
+            f"use a path ending in {kinds}")
+
+
+def _stdout_closed() -> int:
+    """stdout's reader is gone (``| head``): point stdout at /dev/null, so that the
+    interpreter's last flush at exit does not fail again, and say nothing."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # stdout is not a file (a test's)
+        pass
+    return EXIT_BROKEN_PIPE
+
+
 def main(argv: list[str] | None = None) -> int:
     """The ``attitude`` command: parse ``argv`` (default ``sys.argv[1:]``), run the
     subcommand and return its exit code.
@@ -313,10 +361,20 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_INPUT
+    bad = _bad_output(args)
+    if bad is not None:
+        print(bad, file=sys.stderr)
+        return EXIT_INPUT
     file = _file_of(args)
     command = importlib.import_module(COMMANDS[args.command]).command
     try:
-        return command(args)
+        # progress on stderr for long steps, unless --quiet (foundations.progress)
+        with progress.showing(not getattr(args, "quiet", False)):
+            code = command(args)
+        sys.stdout.flush()          # a closed pipe shows here, not at the exit
+        return code
+    except BrokenPipeError:
+        return _stdout_closed()
     except PropagationError as exc:
         print(_error_line(exc, file), file=sys.stderr)
         return EXIT_PROPAGATION

@@ -63,7 +63,7 @@ def _fit(args) -> int:
         for k, lc in enumerate(result.lightcurve_offsets()):
             print(f"  lightcurve {k} offsets (mag, one per session):")
             for label, b, s in zip(lc["session"], lc["offset"], lc["sigma"]):
-                print(f"    session {label}  {b:.5f} +- {s:.2g}")
+                print(f"    session {label}  {b:.5f} +- {s:.2g} mag")
         if post is not None:
             print(f"  posterior: regime fractions {post.regime_fractions}, acceptance "
                   f"{post.acceptance_fraction:.2f}")
