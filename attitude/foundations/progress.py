@@ -149,6 +149,11 @@ class Progress:
                 _active.append(self)
                 self._mode = "terminal" if _stderr_is_terminal() else "plain"
 
+    @property
+    def shown(self) -> bool:
+        """Whether this report is drawn (off, nested in another, or closed: False)."""
+        return self._mode is not None
+
     # -- the text of a line ------------------------------------------------------------
     def _text(self, now: float) -> str:
         count = self._count()
@@ -187,9 +192,13 @@ class Progress:
         done = self.amount(self.done)
         return f"{done}{unit}" if done else ""
 
-    def update(self, advance: float = 1.0) -> None:
-        """``advance`` more units done."""
+    def update(self, advance: float = 1.0, *, total=None) -> None:
+        """``advance`` more units done (and the total, when it has become known)."""
         with self._guard:            # the ticking thread updates too
+            if total is not None:
+                self.total = max(float(total), 0.0)
+                if self._rich is not None:
+                    self._rich.update(self._task, total=self.total or None)
             self._update(advance)
 
     def _update(self, advance: float) -> None:
