@@ -36,7 +36,7 @@ def measured(x, tolerance: float | None = None) -> str:
     x = float(x)
     digits = 6
     if tolerance and tolerance > 0 and x != 0 and math.isfinite(x):
-        digits = min(max(math.ceil(math.log10(abs(x) / tolerance)) + 2, 3), 12)
+        digits = min(max(math.floor(math.log10(abs(x) / tolerance)) + 2, 3), 12)
     return f"{x:.{digits}g}"
 
 
