@@ -58,7 +58,7 @@ def expectation_cells(e: dict) -> tuple[str, str, str, str]:
 
 
 def expectation_line(e: dict) -> str:
-    """``ok   precession: expected 27.38 +/- 0.0821 h, got 27.38``."""
+    """``ok   precession: expected 27.38 +/- 0.0821 h, got 27.38 h``."""
     key, expected, tolerance, got = expectation_cells(e)
     if "tolerance" in e:
         expected = f"{number(e['expected'])} {tolerance}"
