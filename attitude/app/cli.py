@@ -169,7 +169,8 @@ fitted by least squares with the exact torque-free solution, from the guess and 
 discrete alternatives (SAM/LAM mirror, psi0 + pi). Prints the parameters
 with their 1-sigma, the regime and its margin; writes the best state as a scenario you
 can run ([observations].output or -o), and with --posterior the MCMC samples (emcee) as
-netCDF.
+netCDF: beside -o and named from it (-o out/best.toml: out/best_posterior.nc), else
+[observations.posterior].netcdf or SCENARIO_posterior.nc.
 
   attitude fit scenarios/tumbler_fit.toml
   attitude run scenarios/tumbler_fit_fit.toml
@@ -368,8 +369,10 @@ def main(argv: list[str] | None = None) -> int:
     file = _file_of(args)
     command = importlib.import_module(COMMANDS[args.command]).command
     try:
-        # progress on stderr for long steps, unless --quiet (foundations.progress)
-        with progress.showing(not getattr(args, "quiet", False)):
+        # progress on stderr for long steps (foundations.progress), unless --quiet; not
+        # for check, whose scenarios run in parallel processes (their reports would mix)
+        show = not getattr(args, "quiet", False) and args.command != "check"
+        with progress.showing(show):
             code = command(args)
         sys.stdout.flush()          # a closed pipe shows here, not at the exit
         return code
