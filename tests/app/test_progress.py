@@ -128,3 +128,28 @@ def test_a_terminal_gets_a_bar_that_goes_away():
     assert "\x1b[" in screen                                    # drawn with escapes
     assert "attitude: demo:" not in screen                      # not the plain lines
     assert screen.rstrip().endswith("OUTPUT")                   # removed before the output
+
+
+def test_run_workers_reports_the_chunks_the_scheduler_finished(tmp_path, capsys, immediate):
+    """The chunks of an ensemble counted on the dask scheduler as they finish (a cluster
+    of threads here: the scheduler's counts are the same as with processes)."""
+    pytest.importorskip("distributed")
+    import attitude as att
+    from attitude.app.commands.run import _task_progress
+    from attitude.propagation.cluster import local_cluster
+
+    cloud = att.Ensemble.from_arrays(principal_moments=np.tile([1.0, 1.5, 2.0], (50, 1)),
+                                     quaternion=np.tile([0.0, 0.0, 0.0, 1.0], (50, 1)),
+                                     omega_body=np.tile([0.01, 0.0, 0.1], (50, 1)),
+                                     epoch="2030-01-01")
+    with local_cluster(1, processes=False) as client:
+        with progress.showing(), _task_progress(client, interval=0.05):
+            eph = att.propagate(cloud, np.linspace(0.0, 600.0, 5), client=client, chunks=10)
+            eph.to_netcdf(tmp_path / "cloud.nc")
+        first = capsys.readouterr().err.splitlines()
+        with progress.showing(), _task_progress(client, interval=0.05):   # a second run:
+            eph = att.propagate(cloud, np.linspace(0.0, 900.0, 5), client=client, chunks=25)
+            eph.to_netcdf(tmp_path / "cloud2.nc")                       # its chunks only
+        second = capsys.readouterr().err.splitlines()
+    assert first[-1].startswith("attitude: ensemble: done, 5 of 5 chunks in "), first
+    assert second[-1].startswith("attitude: ensemble: done, 2 of 2 chunks in "), second

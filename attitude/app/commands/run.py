@@ -240,16 +240,21 @@ def _task_progress(client, interval: float = 0.5):
     stop = threading.Event()
     start = client.run_on_scheduler(_chunk_counts)[0]      # chunks of earlier runs
 
+    done = [0]
+
+    def poll() -> bool:
+        try:
+            finished, waiting = client.run_on_scheduler(_chunk_counts)
+        except Exception:  # noqa: BLE001 - the cluster closing: the report stops
+            return False
+        now = finished - start
+        bar.update(now - done[0], total=now + waiting or None)
+        done[0] = now
+        return True
+
     def watch():
-        done = 0
-        while not stop.wait(interval):
-            try:
-                finished, waiting = client.run_on_scheduler(_chunk_counts)
-            except Exception:  # noqa: BLE001 - the cluster closing: the report stops
-                return
-            now = finished - start
-            bar.update(now - done, total=now + waiting or None)
-            done = now
+        while not stop.wait(interval) and poll():
+            pass
 
     thread = threading.Thread(target=watch, name="ensemble progress", daemon=True)
     thread.start()
@@ -258,6 +263,7 @@ def _task_progress(client, interval: float = 0.5):
     finally:
         stop.set()
         thread.join()
+        poll()                  # the chunks that finished since the last look
         bar.close()
 
 
