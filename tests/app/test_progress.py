@@ -153,3 +153,53 @@ def test_run_workers_reports_the_chunks_the_scheduler_finished(tmp_path, capsys,
         second = capsys.readouterr().err.splitlines()
     assert first[-1].startswith("attitude: ensemble: done, 5 of 5 chunks in "), first
     assert second[-1].startswith("attitude: ensemble: done, 2 of 2 chunks in "), second
+
+
+COMPILE_ON_A_TERMINAL = """
+import os, pty, sys
+pid, fd = pty.fork()
+if pid == 0:          # the child: stderr is a terminal, numba's cache empty
+    from attitude.foundations import progress
+    from attitude.propagation.compiled import jit
+    progress.DELAY = 0.0          # shown at once, however fast this machine compiles
+
+    @jit
+    def twice(x):
+        return 2.0 * x
+
+    twice(1.0)
+    print("OUTPUT", flush=True)
+    os._exit(0)
+chunks = []
+while True:
+    try:
+        data = os.read(fd, 4096)
+    except OSError:
+        break
+    if not data:
+        break
+    chunks.append(data)
+os.waitpid(pid, 0)
+sys.stdout.write(b"".join(chunks).decode(errors="replace"))
+"""
+
+
+def test_the_first_compile_on_a_terminal_is_a_report_that_goes_away(tmp_path):
+    """On a terminal the compile notice is a report with the time going, removed when
+    the kernel is compiled (in a log it stays the one line of tests/test_compile_notice.py).
+    The kernel is compiled in a fresh interpreter with numba's cache in a folder of its
+    own."""
+    pytest.importorskip("rich")
+    from attitude.propagation import compiled
+    if not compiled.NUMBA:
+        pytest.skip("numba absent or disabled")
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "NUMBA_CACHE_DIR": str(tmp_path)}
+    env.pop("ATTITUDE_QUIET", None)
+    proc = subprocess.run([sys.executable, "-c", COMPILE_ON_A_TERMINAL], capture_output=True,
+                          text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr
+    screen = proc.stdout
+    words = COMPILE_NOTICE.removeprefix("attitude: ").rstrip(".")
+    assert words in screen and "\x1b[" in screen                   # drawn by rich
+    assert COMPILE_NOTICE not in screen                             # not the plain line
+    assert screen.rstrip().endswith("OUTPUT")                       # removed before it
