@@ -3,7 +3,8 @@
 Exit codes: 0 success, 1 an expectation failed, 2 bad input (malformed or non-physical
 scenario, unreadable file: one line ``attitude: error: FILE: KEY: message``, never a
 traceback), 3 the propagation itself failed (or an internal error: one line, the traceback
-with ``ATTITUDE_DEBUG=1``).
+with ``ATTITUDE_DEBUG=1``), 141 stdout closed before the output was written (``| head``:
+nothing said, as a command killed by SIGPIPE).
 
 This module builds the parser and maps errors to exit codes, and nothing more, so that
 ``attitude --help`` answers at once: each command is a module of
@@ -93,7 +94,8 @@ Rotation-state analysis of spacecraft and small bodies.
   attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML,
                                            .bc for a SPICE C-kernel
 
-Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed.
+Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed
+(141: stdout closed early, as by | head).
 """
 
 
