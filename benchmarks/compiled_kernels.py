@@ -28,6 +28,7 @@ Run from the repository root::
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import subprocess
@@ -187,4 +188,7 @@ def _plain_module():
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

@@ -13,6 +13,7 @@ known phases, the P_psi = 263 +/- 6 h cut) are those of the page and are repeate
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 import astropy.units as u
@@ -116,4 +117,7 @@ def main(n_draws: int = 100_000, n_times: int = 400):
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

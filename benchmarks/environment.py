@@ -85,7 +85,7 @@ def torque_cost(hours: float, method: str = "splitting"):
 
 
 def main():
-    parser = argparse.ArgumentParser()
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--hours", type=float, default=24.0)
     parser.add_argument("--method", default="splitting", choices=["splitting", "integrator"])
     args = parser.parse_args()

@@ -12,6 +12,7 @@ call (emcee with vectorize=True).
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
@@ -72,4 +73,7 @@ def main():
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

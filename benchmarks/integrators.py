@@ -25,6 +25,7 @@ Run from the repository root::
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import platform
@@ -229,4 +230,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

@@ -20,6 +20,7 @@ Run from the repository root::
 
 from __future__ import annotations
 
+import argparse
 import os
 import platform
 import sys
@@ -100,4 +101,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

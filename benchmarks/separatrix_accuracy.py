@@ -18,6 +18,7 @@ Run from the repository root::
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
@@ -154,4 +155,7 @@ def shape_sweep():
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

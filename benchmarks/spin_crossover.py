@@ -15,6 +15,7 @@ Writes ``benchmarks/results/spin_crossover.json`` atomically.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
@@ -102,4 +103,7 @@ def main():
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

@@ -18,6 +18,7 @@ and with it (the model called from Python at every kick).
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
@@ -124,4 +125,7 @@ def main():
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

@@ -17,6 +17,7 @@ Run from the repository root::
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import platform
@@ -113,4 +114,7 @@ def main():
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__,   # --help: what it measures, then exit
+                            formatter_class=argparse.RawDescriptionHelpFormatter
+                            ).parse_args()
     main()

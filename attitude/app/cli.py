@@ -3,7 +3,8 @@
 Exit codes: 0 success, 1 an expectation failed, 2 bad input (malformed or non-physical
 scenario, unreadable file: one line ``attitude: error: FILE: KEY: message``, never a
 traceback), 3 the propagation itself failed (or an internal error: one line, the traceback
-with ``ATTITUDE_DEBUG=1``).
+with ``ATTITUDE_DEBUG=1``), 141 stdout closed before the output was written (``| head``:
+nothing said, as a command killed by SIGPIPE).
 
 This module builds the parser and maps errors to exit codes, and nothing more, so that
 ``attitude --help`` answers at once: each command is a module of
@@ -20,6 +21,7 @@ import os
 import sys
 import traceback
 
+from ..foundations import progress
 from ..foundations.errors import AttitudeError, PropagationError
 from ..version import __version__
 from .commands.common import (
@@ -32,6 +34,25 @@ from .commands.common import (
 
 __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_EXPECTATION", "EXIT_INPUT",
            "EXIT_PROPAGATION"]
+
+#: Command name -> the suffixes its output path (``-o``, or ``OUT`` of convert) may end
+#: in, with what each writes; any other suffix is bad input (exit 2), not a netCDF file
+#: under a misleading name.
+OUTPUT_SUFFIXES = {
+    "run": {".nc": "netCDF ephemeris"},
+    "lightcurve": {".nc": "netCDF lightcurve"},
+    "section": {".nc": "netCDF surface of section"},
+    "fit": {".toml": "fitted scenario"},
+    "convert": {".nc": "netCDF", ".aem": "CCSDS AEM, KVN", ".kvn": "CCSDS AEM, KVN",
+                ".xml": "CCSDS AEM, XML", ".bc": "SPICE C-kernel"},
+}
+
+#: The exit code when stdout is closed before the command is done (``attitude check
+#: scenarios/ | head -1``): 128 + SIGPIPE, what the shell reports for a command killed
+#: by SIGPIPE (cat, grep, ...), so that ``set -o pipefail`` tells the truth: the
+#: command did not finish (``check`` may not have checked every scenario).  No message
+#: and no traceback: the reader left on purpose.
+EXIT_BROKEN_PIPE = 128 + 13
 
 #: Command name -> the module that runs it (its ``command(args) -> int``), imported when
 #: the command runs (never for ``--help``).
@@ -74,7 +95,8 @@ Rotation-state analysis of spacecraft and small bodies.
   attitude convert eph.nc eph.aem          netCDF -> CCSDS AEM (KVN); .xml for XML,
                                            .bc for a SPICE C-kernel
 
-Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed.
+Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 propagation failed
+(141: stdout closed early, as by | head).
 """
 
 
@@ -171,7 +193,8 @@ fitted by least squares with the exact torque-free solution, from the guess and 
 discrete alternatives (SAM/LAM mirror, psi0 + pi). Prints the parameters
 with their 1-sigma, the regime and its margin; writes the best state as a scenario you
 can run ([observations].output or -o), and with --posterior the MCMC samples (emcee) as
-netCDF.
+netCDF: beside -o and named from it (-o out/best.toml: out/best_posterior.nc), else
+[observations.posterior].netcdf or SCENARIO_posterior.nc.
 
   attitude fit scenarios/tumbler_fit.toml
   attitude run scenarios/tumbler_fit_fit.toml
@@ -396,6 +419,34 @@ def _error_line(exc: Exception, file: str | None) -> str:
     return f"attitude: error: {text}"
 
 
+def _bad_output(args) -> str | None:
+    """The error line of an output path whose suffix the command cannot write."""
+    accepted = OUTPUT_SUFFIXES.get(args.command)
+    path = getattr(args, "output", None)
+    if accepted is None or path is None:
+        return None
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix in accepted:
+        return None
+    option = "OUT" if args.command == "convert" else "-o"
+    kinds = ", ".join(f"{s} ({what})" for s, what in accepted.items())
+    return (f"attitude: error: {path}: {option}: 'attitude {args.command}' cannot write "
+            f"{'a file without a suffix' if not suffix else repr(suffix) + ' files'}; "
+            f"use a path ending in {kinds}")
+
+
+def _stdout_closed() -> int:
+    """stdout's reader is gone (``| head``): point stdout at /dev/null, so that the
+    interpreter's last flush at exit does not fail again, and say nothing."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # stdout is not a file (a test's)
+        pass
+    return EXIT_BROKEN_PIPE
+
+
 def main(argv: list[str] | None = None) -> int:
     """The ``attitude`` command: parse ``argv`` (default ``sys.argv[1:]``), run the
     subcommand and return its exit code.
@@ -417,10 +468,22 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_INPUT
+    bad = _bad_output(args)
+    if bad is not None:
+        print(bad, file=sys.stderr)
+        return EXIT_INPUT
     file = _file_of(args)
     command = importlib.import_module(COMMANDS[args.command]).command
     try:
-        return command(args)
+        # progress on stderr for long steps (foundations.progress), unless --quiet; not
+        # for check, whose scenarios run in parallel processes (their reports would mix)
+        show = not getattr(args, "quiet", False) and args.command != "check"
+        with progress.showing(show):
+            code = command(args)
+        sys.stdout.flush()          # a closed pipe shows here, not at the exit
+        return code
+    except BrokenPipeError:
+        return _stdout_closed()
     except PropagationError as exc:
         print(_error_line(exc, file), file=sys.stderr)
         return EXIT_PROPAGATION

@@ -208,6 +208,11 @@ def load_scenario(path: str | Path) -> Scenario:
 
     prop = doc["propagation"]
     duration, step = prop["duration"], prop["step"]
+    if step > duration:
+        raise r.fail("propagation.step", f"the step ({step:.6g} s) is longer than "
+                                         f"propagation.duration ({duration:.6g} s): the run "
+                                         "would hold the first epoch alone; use a step no "
+                                         "longer than the duration")
     if duration / step > 5e7:
         raise r.fail("propagation.step", f"{duration / step:.3g} epochs is too many for one "
                                          "run; use a longer step")

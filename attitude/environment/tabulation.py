@@ -17,6 +17,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
+from ..foundations.errors import QuantityError
+
 __all__ = ["TimeTable"]
 
 
@@ -51,10 +53,14 @@ class TimeTable:
 
     def __init__(self, evaluate: Callable, *, spacing: float, segment: float,
                  derivative: bool = False):
-        n = round(segment / spacing)
-        if not (spacing > 0 and n >= 4 and abs(n * spacing - segment) <= 1e-9 * segment):
-            raise ValueError(f"segment ({segment} s) must hold a whole number >= 4 of "
-                             f"node spacings ({spacing} s)")
+        if not (np.isfinite(spacing) and spacing > 0):
+            raise QuantityError(f"the node spacing must be a positive finite number of "
+                                f"seconds, got {spacing!r}", key="spacing")
+        n = round(segment / spacing) if np.isfinite(segment) else 0
+        if not (n >= 4 and abs(n * spacing - segment) <= 1e-9 * segment):
+            raise QuantityError(f"the segment ({segment} s) must hold a whole number >= 4 "
+                                f"of node spacings ({spacing} s); choose a segment of 4 "
+                                "or more spacings", key="segment")
         self._evaluate = evaluate
         self.spacing = float(spacing)
         self.segment = float(segment)
@@ -91,7 +97,8 @@ class TimeTable:
         ([0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0], (4, 8, 2))
         """
         if not (np.isfinite(t0) and np.isfinite(t1) and t0 <= t1):
-            raise ValueError(f"expected finite times t0 <= t1, got {t0}, {t1}")
+            raise QuantityError(f"expected finite times t0 <= t1, got {t0}, {t1}",
+                                key="t_span")
         first, last = int(np.floor(t0 / self.segment)), int(np.floor(t1 / self.segment))
         splines = [self._spline(k) for k in range(first, last + 1)]
         x = np.concatenate([s.x[:-1] for s in splines] + [splines[-1].x[-1:]])
@@ -137,13 +144,15 @@ class TimeTable:
             if last is not None and last[0] == x:   # several torques ask at one stage
                 return last[1].copy()
             if not np.isfinite(x):
-                raise ValueError("times must be finite")
+                raise QuantityError(f"times must be finite, got {x}", key="t")
             value = self._horner(int(np.floor(x / self.segment)), x, nu)
             self._last[nu] = (x, value)
             return value.copy()
         flat = t.reshape(-1)
         if not np.all(np.isfinite(flat)):
-            raise ValueError("times must be finite")
+            raise QuantityError("times must be finite, got "
+                                f"{int(np.count_nonzero(~np.isfinite(flat)))} that are not",
+                                key="t")
         k = np.floor(flat / self.segment).astype(int)
         out = None
         for seg in np.unique(k):

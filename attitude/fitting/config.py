@@ -312,6 +312,20 @@ def _vector(v) -> str:
     return "[" + ", ".join(f"{float(x):.17g}" for x in v) + "]"
 
 
+#: The unit (or the ratio) of each parameter in the fitted scenario's comments; the
+#: angles in degrees, as ``attitude fit`` prints them.
+_COMMENT_UNITS = {"angular_momentum_ra": "deg", "angular_momentum_dec": "deg",
+                  "phi0": "deg", "psi0": "deg", "precession_period": "s",
+                  "energy_ratio": "(E/E0)", "ratio_a": "(A/C)", "ratio_b": "(B/C)"}
+
+
+def _labelled(name: str, value: float, sigma: float) -> str:
+    """``30.23289012 +- 0.00803 deg``: a parameter and its 1-sigma with the unit."""
+    unit = _COMMENT_UNITS.get(name, "")
+    scale = np.degrees(1.0) if unit == "deg" else 1.0
+    return f"{value * scale:.10g} +- {sigma * scale:.3g} {unit}".rstrip()
+
+
 def fitted_scenario(result: FitResult, *, name: str, duration: float, step: float,
                     source: str) -> str:
     """The fitted body and state as the text of a scenario file one can propagate.
@@ -336,7 +350,7 @@ def fitted_scenario(result: FitResult, *, name: str, duration: float, step: floa
         f"# Fitted by `attitude fit {source}`: regime {result.regime}, chi2 = "
         f"{result.chi2:.6g} for {result.dof} degrees of freedom.",
         "# Parameters (1-sigma):",
-        *(f"#   {k} = {result.parameters[k]:.10g} +- {result.uncertainties[k]:.3g}"
+        *(f"#   {k} = {_labelled(k, result.parameters[k], result.uncertainties[k])}"
           for k in PARAMETERS),
         *(f"#   lightcurve {n} session {label}: offset = {b:.6f} +- {sb:.2g} mag"
           for n, lc in enumerate(result.lightcurve_offsets())

@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from ..foundations.errors import MissingDependencyError
+from ..foundations.progress import Progress
 from .leastsq import FitResult, Objective, project
 from .parameters import PARAMETERS
 
@@ -104,6 +105,8 @@ def sample_posterior(result: FitResult, observations=None, *, n_walkers: int = 3
     scatter : float
         Walkers start in a Gaussian ball of ``scatter`` times the fit's 1-sigma (or of
         ``scatter`` relative where the 1-sigma is zero).
+    progress : bool
+        Report the steps on stderr (:mod:`attitude.foundations.progress`).
 
     Returns
     -------
@@ -161,7 +164,10 @@ def sample_posterior(result: FitResult, observations=None, *, n_walkers: int = 3
     sampler = emcee.EnsembleSampler(n_walkers, k, log_prob, vectorize=True)
     sampler.random_state = np.random.RandomState(  # emcee's moves draw from their own
         int(generator.integers(2**31))).get_state()   # legacy generator: seed it
-    sampler.run_mcmc(start, n_steps, progress=progress)
+    # run_mcmc's loop, with attitude's progress report instead of emcee's tqdm bar
+    with Progress(n_steps, "posterior (MCMC)", unit="steps", show=progress) as bar:
+        for _ in sampler.sample(start, iterations=n_steps):
+            bar.update()
     burn = n_steps // 4 if burn is None else int(burn)
     chain = sampler.get_chain(discard=burn)                     # (step, walker, k)
     names = [PARAMETERS[i] for i in objective.free]

@@ -316,8 +316,8 @@ def read_csv(path, *, time_scale: str = "utc") -> Lightcurve:
     ...     with open(path, "w") as f:
     ...         _ = f.write("mjd,mag,session\\n60000.0,12.0,1\\n60000.5,12.4,2\\n")
     ...     lc = read_csv(path)
-    >>> lc.dataset.session.values.tolist(), lc.time.tolist()
-    ([0, 1], [0.0, 43200.0])
+    >>> lc.dataset.session.values.tolist(), lc.time.tolist()   # the file's session numbers
+    ([1, 2], [0.0, 43200.0])
     """
     path = Path(path)
     where = str(path)
@@ -367,7 +367,10 @@ def read_csv(path, *, time_scale: str = "utc") -> Lightcurve:
     except ValueError as exc:
         raise LightcurveFormatError(f"cannot read the {time_kind} column ({exc})",
                                     path=where) from None
-    _, session = np.unique(np.array(ses), return_inverse=True)
+    try:                      # the file's session numbers, kept (1, 2, 3 stay 1, 2, 3)
+        session = np.array([int(s) for s in ses])
+    except ValueError:        # labels that are not integers: numbered in sorted order
+        _, session = np.unique(np.array(ses), return_inverse=True)
     return _build(when, np.array(mag), np.array(err), session,
                   title="observed lightcurve", source=f"CSV file {path.name}",
                   attrs={"format": "CSV"})

@@ -61,6 +61,7 @@ from pathlib import Path
 import numpy as np
 
 from ..foundations import elliptic as el
+from ..foundations import progress
 from ..foundations import quaternion as quat
 from ..model import freebody as fb
 
@@ -182,11 +183,37 @@ def quiet_compiles(quiet: bool = True):
         set_compile_notice(previous)
 
 
+#: The terminal's report of the first compile (``[dispatcher, context]``), while it lasts.
+_compiling: list = []
+
+
 def _say_compiling(dispatcher) -> None:
-    """Print :data:`COMPILE_NOTICE` once, when one of :func:`jit`'s kernels compiles."""
+    """Say once, when one of :func:`jit`'s kernels compiles: :data:`COMPILE_NOTICE` as a
+    line, or on a terminal the same words with the time going
+    (:func:`attitude.foundations.progress.activity`, until that kernel is compiled)."""
     if _notice[0] and not _notice[1] and dispatcher in _KERNELS:
         _notice[1] = True
+        terminal = False
+        try:
+            terminal = sys.stderr.isatty()
+        except (AttributeError, ValueError):
+            pass
+        if terminal:
+            report = progress.activity(
+                COMPILE_NOTICE.removeprefix("attitude: ").rstrip("."), show=True)
+            if report.__enter__().shown:
+                _compiling[:] = [dispatcher, report]
+                return
+            report.__exit__(None, None, None)   # within another report: the line
         print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+
+def _compiled(dispatcher) -> None:
+    """The end of the compile that :func:`_say_compiling` reported on a terminal."""
+    if _compiling and _compiling[0] is dispatcher:
+        report = _compiling[1]
+        _compiling.clear()
+        report.__exit__(None, None, None)
 
 
 def _listen_to_compiles(numba) -> None:
@@ -201,7 +228,7 @@ def _listen_to_compiles(numba) -> None:
                 _say_compiling(ev.data["dispatcher"])
 
             def on_end(self, ev):
-                pass
+                _compiled(ev.data["dispatcher"])
 
         event.register("numba:compile", CompileNotice())
     except (AttributeError, TypeError):   # pragma: no cover - numba's API changed

@@ -75,14 +75,13 @@ References
 from __future__ import annotations
 
 import math
-import sys
-import time as _time
 
 import numpy as np
 
 from ..deprecation import moved_attribute
 from ..foundations import quaternion as quat
 from ..foundations.errors import InvalidStateError, PropagationError
+from ..foundations.progress import Progress, duration_text
 from ..model.body import as_bodies, to_body_frame
 from . import compiled, compiled_loop
 from .compiled_torques import compile_torques
@@ -124,52 +123,10 @@ def __getattr__(name):
     return moved_attribute(__name__, name)
 
 
-# ===========================================================================
-# progress
-# ===========================================================================
-class _Progress:
-    """``tqdm`` when installed, else a one-line stderr counter (at most every 0.5 s);
-    counts simulated seconds."""
-
-    def __init__(self, total: float, enabled: bool):
-        self.total = max(float(total), 1e-300)
-        self.done = 0.0
-        self.bar = None
-        self.enabled = enabled
-        self.t0 = self.last = _time.monotonic()
-        if not enabled:
-            return
-        try:
-            from tqdm.auto import tqdm  # optional (a progress bar when installed)
-        except ImportError:
-            return
-        self.bar = tqdm(total=self.total, unit="s", unit_scale=True, desc="splitting",
-                        leave=False)
-
-    def update(self, dt: float) -> None:
-        if not self.enabled:
-            return
-        self.done += dt
-        if self.bar is not None:
-            self.bar.update(dt)
-            return
-        now = _time.monotonic()
-        if now - self.last >= 0.5 or self.done >= self.total * (1 - 1e-12):
-            self.last = now
-            pct = 100.0 * min(self.done / self.total, 1.0)
-            sys.stderr.write(f"\rsplitting: {pct:5.1f}% ({self.done:.6g} of {self.total:.6g}"
-                             f" s simulated, {now - self.t0:.1f} s)")
-            sys.stderr.flush()
-
-    def close(self) -> None:
-        if not self.enabled:
-            return
-        if self.bar is not None:
-            self.bar.close()
-        else:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-
+def _progress(total: float, enabled: bool) -> Progress:
+    """The report of a run (:mod:`attitude.foundations.progress`): simulated time."""
+    return Progress(total, "propagation", unit="simulated", show=enabled,
+                    amount=duration_text)
 
 
 # ===========================================================================
@@ -422,8 +379,9 @@ def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h, h_limit, expo, 
             out_w[i, idx] = ow
         return sum(abs(float(t[idx][-1])) for idx in segments) / len(specs)
 
-    for done in compiled.each_on_cores(lambda i: run(i, specs[i]), len(specs)):
-        bar.update(done)
+    with bar.ticking():          # one body is one call: the elapsed time moves meanwhile
+        for done in compiled.each_on_cores(lambda i: run(i, specs[i]), len(specs)):
+            bar.update(done)
 
 
 def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | None = None,
@@ -464,7 +422,8 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
     scheme : str, optional
         One of :data:`SCHEMES` (default :data:`DEFAULT_SCHEME` of the order).
     progress : bool
-        Show a progress bar (``tqdm`` if installed, else a line on stderr).
+        Report the progress on stderr (:mod:`attitude.foundations.progress`: a bar on
+        a terminal, occasional lines otherwise).
     steps_per_period : float, optional
         ``N`` of the default step rule (:func:`choose_step`).
     t0 : float
@@ -600,7 +559,7 @@ def integrate_splitting(bodies, quat0, omega0, t, *, torques=(), step: float | N
                                     "together with external ones; use compiled=None",
                                     key="compiled")
     segments = _segments(t)
-    bar = _Progress(sum(float(np.max(np.abs(t[idx]))) for idx in segments), progress)
+    bar = _progress(sum(float(np.max(np.abs(t[idx]))) for idx in segments), progress)
 
     def store(j, q, w):
         ops.store(out_q, out_w, j, q, w)

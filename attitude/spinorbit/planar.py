@@ -35,6 +35,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..foundations.errors import SpinOrbitError
+from ..foundations.progress import track
 from ..model.orbit import solve_kepler
 from .resonances import cayley_coefficient
 
@@ -230,7 +231,8 @@ def stroboscopic_map(omega0: float, e: float, angles, rates, n_orbits: int, *,
     angle[:, 0], rate[:, 0] = th, w
     h = None
     atol = rtol * 1e-2
-    for j in range(n_orbits):
+    # reported on stderr when the caller shows progress (the attitude command does)
+    for j in track(range(n_orbits), n_orbits, "surface of section", unit="orbits"):
         y = np.concatenate([th, w, dth.ravel(), dw.ravel()])
         y, h = _advance(system, y, 0.0, TWO_PI, rtol, atol, h)
         th, w, dth, dw = system.split(y)

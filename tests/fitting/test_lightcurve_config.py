@@ -140,7 +140,7 @@ def test_attitude_fit_recovers_the_state_and_the_zero_points(tmp_path, capsys):
     # of the ellipsoid is in arbitrary units): their differences, within 3 sigma
     offsets = [line.split() for line in text.splitlines()
                if line.strip().startswith("session ")]
-    assert [o[1] for o in offsets] == ["0", "1", "2"]     # the reader numbers them from 0
+    assert [o[1] for o in offsets] == ["1", "2", "3"]     # the file's session numbers
     b = np.array([float(o[2]) for o in offsets])
     s = np.array([float(o[4]) for o in offsets])
     diff = np.diff(b) - np.diff(ZERO_POINTS)

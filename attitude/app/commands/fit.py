@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import sys
 from pathlib import Path
 
@@ -24,6 +26,52 @@ def command(args) -> int:
         return _fit(args)
 
 
+def _posterior_path(args, cfg) -> Path:
+    """Where the MCMC samples go: beside ``-o`` and named from it when it is given
+    (``out/best.toml`` -> ``out/best_posterior.nc``), else ``[observations.posterior]
+    .netcdf`` or ``SCENARIO_posterior.nc``."""
+    if args.output:
+        out = Path(args.output)
+        return out.with_name(f"{out.stem}_posterior.nc")
+    if cfg.posterior_netcdf is not None:
+        return Path(cfg.posterior_netcdf)
+    scenario = Path(args.scenario)
+    return scenario.with_name(f"{scenario.stem}_posterior.nc")
+
+
+@contextlib.contextmanager
+def _emcee_log():
+    """emcee's log messages (the chain shorter than 50 autocorrelation times, ...) kept
+    from stderr and collected, so that the command says it once in its own words."""
+    logger = logging.getLogger("emcee")
+    notes: list[str] = []
+
+    class Collect(logging.Handler):
+        def emit(self, record):
+            notes.append(record.getMessage())
+
+    handler, propagate = Collect(logging.WARNING), logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield notes
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = propagate
+
+
+def _short_chain_note(post, n_steps: int, notes: list[str]) -> str:
+    """One line for what emcee logged (in practice: a chain too short to estimate its
+    autocorrelation time well)."""
+    taus = [t for t in post.autocorrelation_time.values() if t == t]
+    if any("autocorrelation" in n for n in notes) and taus:
+        return (f"attitude: note: the posterior chain ({n_steps} steps) is shorter than "
+                f"50 autocorrelation times (up to {max(taus):.3g} steps): its intervals are "
+                "rough; raise [observations.posterior].steps")
+    return "attitude: note: emcee: " + "; ".join(dict.fromkeys(" ".join(n.split())
+                                                             for n in notes))
+
+
 def _fit(args) -> int:
     scenario = load_scenario(args.scenario)
     cfg = scenario.observations
@@ -40,9 +88,14 @@ def _fit(args) -> int:
     post = None
     if args.posterior or cfg.posterior is not None:
         opts = cfg.posterior or {}
-        post = sample_posterior(result, n_walkers=opts.get("walkers", 32),
-                                n_steps=opts.get("steps", 1000), rng=opts.get("seed"))
-        nc = cfg.posterior_netcdf or Path(args.scenario).with_suffix(".posterior.nc")
+        n_steps = opts.get("steps", 1000)
+        with _emcee_log() as notes:
+            post = sample_posterior(result, n_walkers=opts.get("walkers", 32),
+                                    n_steps=n_steps, rng=opts.get("seed"),
+                                    progress=not args.quiet)
+        if notes and not args.quiet:
+            print(_short_chain_note(post, n_steps, notes), file=sys.stderr)
+        nc = _posterior_path(args, cfg)
         written.append(write_atomically(nc, lambda tmp: post.samples.to_netcdf(tmp)))
     if args.plot:
         stem = target.with_suffix("")
@@ -63,7 +116,7 @@ def _fit(args) -> int:
         for k, lc in enumerate(result.lightcurve_offsets()):
             print(f"  lightcurve {k} offsets (mag, one per session):")
             for label, b, s in zip(lc["session"], lc["offset"], lc["sigma"]):
-                print(f"    session {label}  {b:.5f} +- {s:.2g}")
+                print(f"    session {label}  {b:.5f} +- {s:.2g} mag")
         if post is not None:
             print(f"  posterior: regime fractions {post.regime_fractions}, acceptance "
                   f"{post.acceptance_fraction:.2f}")

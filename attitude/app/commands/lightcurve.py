@@ -12,7 +12,7 @@ from ...photometry.config import run_lightcurve
 from ...photometry.plot import save_lightcurve_figures
 from ...propagation.compiled import quiet_compiles
 from ..scenario import load_scenario
-from .common import EXIT_EXPECTATION, EXIT_INPUT, EXIT_OK
+from .common import EXIT_EXPECTATION, EXIT_INPUT, EXIT_OK, expectation_line
 
 #: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
 #: is the interface, tested in tests/app/test_cli.py).
@@ -48,9 +48,8 @@ def _lightcurve(args) -> int:
         print(f"  periods: {periods}")
         print(f"  lightcurve period (double-peaked, 2/f of the strongest term "
               f"{fit.strongest}): {fit.lightcurve_period / 3600:.6g} h")
-        for e in result.expect:
-            print(f"  expect {e['key']}: expected {e['expected']} {e['unit']}, got "
-                  f"{e['got']}: {'pass' if e['ok'] else 'FAIL'}")
+        for e in result.expect:          # as attitude run: units, the check's digits
+            print(f"  {expectation_line(e)}")
         for path in result.outputs:
             print(f"  wrote {path}")
     return EXIT_OK if result.ok else EXIT_EXPECTATION

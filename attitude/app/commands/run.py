@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import math
 import sys
+import threading
 from pathlib import Path
 
+from ...foundations.progress import Progress
 from ...model.ephemeris import write_atomically
 from ...propagation.cluster import local_cluster
 from ...propagation.compiled import quiet_compiles
@@ -190,6 +194,79 @@ def _plot_stem(args, result) -> Path:
     return Path(target).with_suffix("")
 
 
+@contextlib.contextmanager
+def _dask_warnings_hidden():
+    """distributed's own log below errors kept off stderr (its nanny's "Worker process
+    still alive after 4.0 seconds, killing" when the cluster closes is no news to the
+    user: the results are written by then)."""
+    try:      # its import sets its loggers' levels: ours must come after
+        import distributed  # noqa: F401  (optional: 'attitude-dynamics[dask]')
+    except ImportError:
+        pass              # local_cluster says what to install
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
+#: The dask tasks of an ensemble's chunks (attitude.propagation.batch), by the prefix the
+#: scheduler counts them under: the name of the function each runs (``_propagate_chunk``)
+#: without dask's leading underscore (``dask.utils.key_split``).
+CHUNK_TASK = "propagate_chunk"
+
+
+def _chunk_counts(dask_scheduler, prefix: str = CHUNK_TASK) -> tuple[int, int]:
+    """``(finished, waiting)`` chunk tasks, on the scheduler: the times a task of the
+    prefix reached memory (a running count), and those still to run."""
+    tasks = dask_scheduler.task_prefixes.get(prefix)
+    if tasks is None:
+        return 0, 0
+    waiting = sum(tasks.states.get(s, 0) for s in ("waiting", "queued", "processing",
+                                                   "no-worker"))
+    return int(tasks.state_counts.get("memory", 0)), int(waiting)
+
+
+@contextlib.contextmanager
+def _task_progress(client, interval: float = 0.5):
+    """The chunks of ``attitude run --workers`` as they finish on the cluster (asked of
+    the scheduler every ``interval`` s), as :mod:`attitude.foundations.progress` shows."""
+    bar = Progress(None, "ensemble", unit="chunks")
+    if not bar.shown:
+        yield
+        return
+    stop = threading.Event()
+    start = client.run_on_scheduler(_chunk_counts)[0]      # chunks of earlier runs
+
+    done = [0]
+
+    def poll() -> bool:
+        try:
+            finished, waiting = client.run_on_scheduler(_chunk_counts)
+        except Exception:  # noqa: BLE001 - the cluster closing: the report stops
+            return False
+        now = finished - start
+        bar.update(now - done[0], total=now + waiting or None)
+        done[0] = now
+        return True
+
+    def watch():
+        while not stop.wait(interval) and poll():
+            pass
+
+    thread = threading.Thread(target=watch, name="ensemble progress", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        poll()                  # the chunks that finished since the last look
+        bar.close()
+
+
 def command(args) -> int:
     """``attitude run``; its ``--quiet`` also silences the kernels' compile notice."""
     with quiet_compiles(args.quiet):
@@ -213,11 +290,11 @@ def _run(args) -> int:
             print(f"attitude: error: {args.scenario}: --workers: the scenario has no "
                   "[ensemble] table (a single body runs in one process)", file=sys.stderr)
             return EXIT_INPUT
-        with local_cluster(args.workers) as client:
+        with _dask_warnings_hidden(), local_cluster(args.workers) as client, \
+                _task_progress(client):
             result = run_scenario(scenario, netcdf=args.output, client=client)
     else:
-        result = run_scenario(scenario, netcdf=args.output,
-                              progress=not args.quiet and sys.stderr.isatty())
+        result = run_scenario(scenario, netcdf=args.output, progress=not args.quiet)
     if args.plot:
         result.outputs.extend(save_figures(result.ephemeris, _plot_stem(args, result),
                                            result.classification,
