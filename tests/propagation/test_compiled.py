@@ -12,6 +12,7 @@ built from it, ``phi = 2^n a_n u`` in the AGM) moves ``f`` by ``|u f'| eps``.
 import importlib.util
 import math
 import os
+import sys
 
 import mpmath
 import numpy as np
@@ -28,20 +29,27 @@ from ..tolerances import EPS, EXACT_SOLUTION, FEW_OPS, assert_agree
 
 
 def _plain_module():
-    """compiled.py loaded afresh with ATTITUDE_NO_NUMBA=1: every kernel as plain Python."""
-    spec = importlib.util.spec_from_file_location("attitude.propagation.compiled_plain",
-                                                  compiled.__file__)
-    module = importlib.util.module_from_spec(spec)
+    """compiled.py loaded afresh with ATTITUDE_NO_NUMBA=1, on a fresh numba machinery
+    (jit.py) that reads it: every kernel as plain Python."""
+    def fresh(name, file):
+        spec = importlib.util.spec_from_file_location(name, file)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
     old = os.environ.get("ATTITUDE_NO_NUMBA")
     os.environ["ATTITUDE_NO_NUMBA"] = "1"
+    machinery = sys.modules["attitude.propagation.jit"]
     try:
-        spec.loader.exec_module(module)
+        sys.modules["attitude.propagation.jit"] = fresh("attitude.propagation.jit_plain",
+                                                        machinery.__file__)
+        return fresh("attitude.propagation.compiled_plain", compiled.__file__)
     finally:
+        sys.modules["attitude.propagation.jit"] = machinery
         if old is None:
             del os.environ["ATTITUDE_NO_NUMBA"]
         else:
             os.environ["ATTITUDE_NO_NUMBA"] = old
-    return module
 
 
 PLAIN = _plain_module()

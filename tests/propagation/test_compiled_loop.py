@@ -200,6 +200,7 @@ def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
     from pathlib import Path
 
     from attitude.propagation import compiled
+    from attitude.propagation import jit as jit_module
 
     here = Path(compiled.__file__).parent
     stamp = here / "__pycache__" / "attitude-kernels.sha1"
@@ -210,7 +211,7 @@ def test_the_kernels_cache_is_keyed_by_all_three_sources(tmp_path):
         stale = here / "__pycache__" / "compiled_loop.stale-test.nbi"
         stale.write_text("x")
         stamp.write_text("changed")
-        compiled._drop_stale_cache()
+        jit_module._drop_stale_cache()
         assert not stale.exists() and stamp.read_text() == digest
 
 
