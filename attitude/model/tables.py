@@ -106,7 +106,8 @@ def read_table(table) -> dict[str, tuple[str, np.ndarray]]:
         except ImportError as exc:
             raise InvalidStateError(f"{path}: reading it needs an optional package "
                                     f"({exc})") from None
-        except (ValueError, OSError) as exc:
+        except (ValueError, OSError, RuntimeError) as exc:  # RuntimeError: netCDF4 on a
+            # damaged HDF5 block
             raise InvalidStateError(f"{path}: not a readable table ({exc})") from None
     elif hasattr(table, "read"):
         table = pd.read_csv(table, skipinitialspace=True, comment="#")
