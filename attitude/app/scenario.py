@@ -151,33 +151,23 @@ class _Reader:
 
 
 def read_scenario_toml(path: str | Path) -> dict:
-    """The TOML document of a scenario file, not yet validated (the one reader of scenario
-    files: ``attitude run`` and ``attitude check`` both use it).
-
-    Raises :class:`ScenarioError` naming the file for a missing file, a folder, a file that
-    is not a regular file (a pipe, a device), an unreadable file, bytes that are not UTF-8
-    and TOML syntax errors.
-    """
+    """The TOML document of a scenario file, not yet validated (``run`` and ``check`` read
+    files through it); a ScenarioError naming the file unless it is readable UTF-8 TOML."""
     path = Path(path)
     try:
-        if path.is_dir():
-            raise IsADirectoryError
-        if path.exists() and not path.is_file():     # a pipe or a device: never opened
-            raise ScenarioError("not a regular file; give a .toml scenario file",
-                                path=str(path))
+        if path.exists() and not path.is_file():     # a folder, a pipe: never opened
+            kind = "a folder" if path.is_dir() else "a pipe or a device"
+            raise ScenarioError(f"is {kind}, not a scenario file", path=str(path))
         with open(path, "rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ScenarioError("no such file", path=str(path)) from None
-    except IsADirectoryError:
-        raise ScenarioError("is a folder, not a scenario file", path=str(path)) from None
     except OSError as exc:
         raise ScenarioError(f"cannot read the file ({exc.strerror or exc})",
                             path=str(path)) from None
     except UnicodeDecodeError as exc:
         raise ScenarioError(f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
-                            f"{exc.start}); save the scenario as UTF-8",
-                            path=str(path)) from None
+                            f"{exc.start}); save the scenario as UTF-8", path=str(path)) from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"not valid TOML ({exc})", path=str(path)) from None
 
