@@ -150,17 +150,25 @@ class _Reader:
                          getattr(exc, "reason", str(exc)))
 
 
-def _read_toml(path: Path) -> dict:
+def read_scenario_toml(path: str | Path) -> dict:
+    """The TOML document of a scenario file, not yet validated (``run`` and ``check`` read
+    files through it); a ScenarioError naming the file unless it is readable UTF-8 TOML."""
+    path = Path(path)
     try:
+        if path.exists() and not path.is_file():     # a folder, a pipe: never opened
+            kind = "a folder" if path.is_dir() else "a pipe or a device"
+            raise ScenarioError(f"is {kind}, not a scenario file", path=str(path))
         with open(path, "rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ScenarioError("no such file", path=str(path)) from None
-    except IsADirectoryError:
-        raise ScenarioError("is a folder, not a scenario file", path=str(path)) from None
     except OSError as exc:
-        raise ScenarioError(f"cannot read the file ({exc.strerror})", path=str(path)) from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"cannot read the file ({exc.strerror or exc})",
+                            path=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+                            f"{exc.start}); save the scenario as UTF-8", path=str(path)) from None
+    except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"not valid TOML ({exc})", path=str(path)) from None
 
 
@@ -194,7 +202,7 @@ def load_scenario(path: str | Path) -> Scenario:
     """
     path = Path(path)
     r = _Reader(path)
-    doc = validate(_read_toml(path), SCENARIO, path=str(path), error=ScenarioError)
+    doc = validate(read_scenario_toml(path), SCENARIO, path=str(path), error=ScenarioError)
     meta = doc.get("scenario", {})
     name = meta.get("name", path.stem)
     description = meta.get("description", "")

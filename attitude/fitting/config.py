@@ -154,29 +154,69 @@ class ObservationsConfig:
 
 
 def _csv(folder: Path, spec: dict, where: str, columns: tuple, path):
+    """``(times, values)`` of a samples file (attitude quaternions, body rates): a header
+    row naming ``t`` (s since the [state] epoch) or ``time`` (ISO, UTC) and ``columns``,
+    then one row of numbers per sample; ``#`` lines are comments.  Every problem is a
+    :class:`ScenarioError` keyed ``{where}.file`` naming the file and its line."""
     file = folder / spec["file"]
+    need = f"{', '.join(columns)} and t (s since the [state] epoch) or time (ISO, UTC)"
+
+    def fail(message, lineno=None):
+        line = f"line {lineno}: " if lineno else ""
+        return ScenarioError(f"{file.name}: {line}{message}", key=f"{where}.file",
+                             path=path)
+
     try:
-        data = np.genfromtxt(file, delimiter=",", names=True, dtype=None, encoding="utf-8")
-    except (OSError, ValueError) as exc:
-        raise ScenarioError(f"cannot read {file}: {exc}", key=f"{where}.file",
-                            path=path) from None
-    data = np.atleast_1d(data)
-    names = data.dtype.names or ()
+        text = file.read_bytes().decode("utf-8", errors="replace")
+    except OSError as exc:
+        raise fail(f"cannot read the file ({exc.strerror or exc})") from None
+    rows = [(k, [f.strip() for f in line.split(",")])
+            for k, line in enumerate(text.splitlines(), start=1)
+            if line.strip() and not line.lstrip().startswith("#")]
+    if not rows:
+        raise fail(f"empty file: give a header row naming the columns {need}, then one row "
+                   "per sample")
+    (header_line, names), rows = rows[0], rows[1:]
     missing = [c for c in columns if c not in names]
     if missing or not ({"t", "time"} & set(names)):
-        raise ScenarioError(f"{file.name} needs the columns {', '.join(columns)} and t "
-                            f"(s since the [state] epoch) or time (ISO, UTC); it has "
-                            f"{', '.join(names)}", key=f"{where}.file", path=path)
-    if "t" in names:
-        times = np.asarray(data["t"], dtype=float)
-    else:
+        raise fail(f"needs the columns {need}; line {header_line} names "
+                   f"{', '.join(names)[:200]}")
+    if not rows:
+        raise fail("no samples after the header row")
+    clock = "t" if "t" in names else "time"
+    i_time, i_values = names.index(clock), [names.index(c) for c in columns]
+    times, values = [], []
+    for lineno, fields in rows:
+        if len(fields) != len(names):
+            raise fail(f"expected {len(names)} fields ({', '.join(names)}), got "
+                       f"{len(fields)}", lineno)
         try:
-            times = Time(list(data["time"]), scale="utc")
-        except ValueError as exc:
-            raise ScenarioError(f"{file.name}: bad time: {exc}", key=f"{where}.file",
-                                path=path) from None
-    values = np.stack([np.asarray(data[c], dtype=float) for c in columns], axis=-1)
-    return times, values
+            row = [float(fields[i]) for i in i_values]
+            times.append(fields[i_time] if clock == "time" else float(fields[i_time]))
+        except ValueError:
+            raise fail(f"not a number in {','.join(fields)[:80]!r}", lineno) from None
+        if not np.all(np.isfinite(row + ([] if clock == "time" else times[-1:]))):
+            raise fail(f"a value is not finite in {','.join(fields)[:80]!r}", lineno)
+        if "qw" in columns and not any(row):
+            raise fail("the quaternion is zero: give unit quaternions qx, qy, qz, qw "
+                       "(scalar last)", lineno)
+        values.append(row)
+    if clock == "t":
+        return np.array(times), np.array(values)
+    try:
+        return Time(times, format="isot", scale="utc"), np.array(values)
+    except ValueError:
+        bad = next((k for (k, _), t in zip(rows, times) if not _is_isot(t)), None)
+        raise fail("the time column must hold ISO 8601 dates such as "
+                   "2026-11-25T00:00:00", bad) from None
+
+
+def _is_isot(text: str) -> bool:
+    try:
+        Time(text, format="isot", scale="utc")
+    except ValueError:
+        return False
+    return True
 
 
 def _lightcurve(spec: dict, where: str, folder: Path, path: str, body, frame: str):

@@ -338,7 +338,7 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
     elif isinstance(state, AttitudeState):
         bodies, states, first = body, state, state
     else:
-        raise InvalidStateError(f"state: expected an AttitudeState for one RigidBody, got "
+        raise InvalidStateError(f"expected an AttitudeState for one RigidBody, got "
                                 f"{type(state).__name__}", key="state")
     torques = list(torques or [])
     method = _stream_method(method, torques)
@@ -418,7 +418,7 @@ def _splitting_blocks(bodies, states, times, block: int, torques, step, order):
         t = elapsed_seconds(times[i0:i0 + block], first.epoch)
         if i0 == 0 and t.size and t[0] < 0:
             raise InvalidStateError(
-                f"times: a stream with torques runs forward from the state's epoch; the "
+                f"a stream with torques runs forward from the state's epoch; the "
                 f"first time is {t[0]!r} s (give times >= 0)", key="times")
         # the run's step grid goes on across blocks: each block also asks for the last
         # grid time it reaches and the next block restarts there (outputs inside steps

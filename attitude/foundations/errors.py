@@ -61,15 +61,28 @@ class AttitudeError(Exception):
     >>> err = AttitudeError("must be in [0, 1), got 1.2", key="orbit.e", path="leo.toml")
     >>> str(err), err.key, err.reason
     ('leo.toml: orbit.e: must be in [0, 1), got 1.2', 'orbit.e', 'must be in [0, 1), got 1.2')
+    >>> str(AttitudeError("rtol: must be in (0, 1)", key="rtol"))  # the key said once
+    'rtol: must be in (0, 1)'
     """
 
     def __init__(self, message: str = "", *, key: str | None = None,
                  path: str | None = None):
-        self.reason = str(message)
+        self.reason = _without_key(str(message), key)
         self.key = key
         self.path = None if path is None else str(path)
         where = ": ".join(p for p in (self.path, key) if p)
         super().__init__(f"{where}: {self.reason}" if where else self.reason)
+
+
+def _without_key(reason: str, key: str | None) -> str:
+    """``reason`` without a leading ``"KEY: "`` (the key, or its last part) that the line
+    ``path: key: reason`` already shows, so that every message names its key once
+    (``"rtol: rtol: expected ..."`` was the symptom)."""
+    if key:
+        for prefix in dict.fromkeys((key, key.rsplit(".", 1)[-1])):
+            if reason.startswith(f"{prefix}: "):
+                return reason[len(prefix) + 2:]
+    return reason
 
 
 class InvalidInertiaError(AttitudeError, ValueError):

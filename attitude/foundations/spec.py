@@ -386,7 +386,9 @@ def _number_checks(x: float, key: Key, where, path, error) -> None:
     if key.bounds is not None:
         lo, hi = key.bounds
         if (lo is not None and not x >= lo) or (hi is not None and not x <= hi):
-            raise error(f"must be within [{lo}, {hi}], got {x!r}", key=where, path=path)
+            span = (f"within [{lo}, {hi}]" if lo is not None and hi is not None else
+                    f"at least {lo}" if lo is not None else f"at most {hi}")
+            raise error(f"must be {span}, got {x!r}", key=where, path=path)
 
 
 def _value(value, key: Key, parent: Mapping, where: str, path, error):

@@ -430,7 +430,8 @@ class Ephemeris:
             with xr.open_dataset(path, engine="netcdf4", decode_times=False,
                                  decode_timedelta=False) as ds:
                 ds = ds.load()
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, RuntimeError) as exc:  # RuntimeError: netCDF4 on a
+            # damaged HDF5 block ("NetCDF: HDF error"), met when the data are read
             raise EphemerisFormatError(f"{path}: not a readable netCDF file ({exc})") from None
         ds = _from_file_dataset(ds)
         if "time" in ds.coords and all(v in ds.variables for v in _REQUIRED_VARIABLES):

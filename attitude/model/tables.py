@@ -106,7 +106,8 @@ def read_table(table) -> dict[str, tuple[str, np.ndarray]]:
         except ImportError as exc:
             raise InvalidStateError(f"{path}: reading it needs an optional package "
                                     f"({exc})") from None
-        except (ValueError, OSError) as exc:
+        except (ValueError, OSError, RuntimeError) as exc:  # RuntimeError: netCDF4 on a
+            # damaged HDF5 block
             raise InvalidStateError(f"{path}: not a readable table ({exc})") from None
     elif hasattr(table, "read"):
         table = pd.read_csv(table, skipinitialspace=True, comment="#")
@@ -138,7 +139,9 @@ def _column_getter(columns):
                                     key=f"column {name}") from None
         if values.size == 0:
             raise InvalidStateError("the table has no rows", key=f"column {name}")
-        # NaN rows are kept: they become invalid bodies, reported by index
+        # NaN rows are kept: they become invalid bodies, reported by index; so do infinite
+        # values (1e999), as NaN, before inf * 0 makes one in the inertia tensors
+        values = np.where(np.isinf(values), np.nan, values)
         return to_si({"value": values, "unit": unit or si}, si, key=f"column {name}",
                      finite=False, error=InvalidStateError)
 

@@ -213,7 +213,8 @@ class Lightcurve:
             with xr.open_dataset(path, engine="netcdf4", decode_times=False,
                                  decode_timedelta=False) as ds:
                 ds = ds.load()
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, RuntimeError) as exc:  # RuntimeError: netCDF4 on a
+            # damaged HDF5 block ("NetCDF: HDF error"), met when the data are read
             raise LightcurveFormatError(f"not a readable netCDF file ({exc})",
                                         path=str(path)) from None
         try:

@@ -38,6 +38,7 @@ References
 from __future__ import annotations
 
 import csv
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +50,10 @@ from attitude.photometry.dataset import Lightcurve
 __all__ = ["read_lightcurve", "read_alcdef", "read_csv"]
 
 _DELIMITERS = {"PIPE": "|", "TAB": "\t"}
+#: Julian dates a lightcurve may hold: 1582-10-15 (the Gregorian calendar) to 3000-01-01;
+#: anything else is a damaged field (a JD of 1e-320 would reach astropy as year -4712).
+_JD_RANGE = (2299160.5, 2816787.5)
+_JD_OFFSET = {"jd": 0.0, "mjd": 2400000.5}
 _TRUE = {"TRUE", "T", "YES", "Y"}
 
 
@@ -241,6 +246,9 @@ def read_alcdef(path, *, reduce: bool = False, light_time: bool = True) -> Light
                 raise fail(lineno, f"not a number in {line!r}") from None
             if not np.isfinite(values).all():
                 raise fail(lineno, f"non-finite value in {line!r}")
+            problem = _date_problem(values[0], "jd")
+            if problem:
+                raise fail(lineno, problem)
             if len(values) == 2 or values[2] <= 0:
                 values = values[:2] + [np.nan]
             block_jd.append(tuple(values))
@@ -350,6 +358,9 @@ def read_csv(path, *, time_scale: str = "utc") -> Lightcurve:
             raise LightcurveFormatError(f"expected {len(names)} fields ({', '.join(names)}), "
                                         f"got {len(fields)}: {line!r}", key=f"line {lineno}",
                                         path=where)
+        def fail(message, lineno=lineno):
+            return LightcurveFormatError(message, key=f"line {lineno}", path=where)
+
         try:
             times.append(fields[i_time].strip() if time_kind == "time"
                          else float(fields[i_time]))
@@ -357,16 +368,27 @@ def read_csv(path, *, time_scale: str = "utc") -> Lightcurve:
             err.append(float(fields[i_err]) if i_err is not None else np.nan)
             ses.append(fields[i_ses].strip() if i_ses is not None else "0")
         except ValueError:
-            raise LightcurveFormatError(f"not a number in {line!r}", key=f"line {lineno}",
-                                        path=where) from None
+            raise fail(f"not a number in {line!r}") from None
+        if not (np.isfinite(mag[-1]) and (time_kind == "time" or np.isfinite(times[-1]))):
+            raise fail(f"non-finite value in {line!r}")
+        problem = None if time_kind == "time" else _date_problem(times[-1], time_kind)
+        if problem:
+            raise fail(problem)
     if not mag:
         raise LightcurveFormatError("no data rows after the header", path=where)
     try:
-        when = Time(times, format="isot" if time_kind == "time" else time_kind,
-                    scale=time_scale)
+        with warnings.catch_warnings():     # a year outside UTC: refused just below
+            warnings.filterwarnings("ignore", message="ERFA function")
+            when = Time(times, format="isot" if time_kind == "time" else time_kind,
+                        scale=time_scale)
     except ValueError as exc:
         raise LightcurveFormatError(f"cannot read the {time_kind} column ({exc})",
                                     path=where) from None
+    if time_kind == "time":
+        for (lineno, _), text, jd in zip(rows[1:], times, when.jd1 + when.jd2):
+            problem = _date_problem(jd, "time", text)
+            if problem:
+                raise LightcurveFormatError(problem, key=f"line {lineno}", path=where)
     try:                      # the file's session numbers, kept (1, 2, 3 stay 1, 2, 3)
         session = np.array([int(s) for s in ses])
     except ValueError:        # labels that are not integers: numbered in sorted order
@@ -374,6 +396,19 @@ def read_csv(path, *, time_scale: str = "utc") -> Lightcurve:
     return _build(when, np.array(mag), np.array(err), session,
                   title="observed lightcurve", source=f"CSV file {path.name}",
                   attrs={"format": "CSV"})
+
+
+def _date_problem(value: float, kind: str, text: str = "") -> str | None:
+    """Why ``value`` (of the column ``kind``: ``jd``, ``mjd``, or ``time`` given as a JD,
+    written ``text``) is not a date within :data:`_JD_RANGE`; None if it is."""
+    lo, hi = _JD_RANGE
+    if lo <= value + _JD_OFFSET.get(kind, 0.0) <= hi:
+        return None
+    fix = {"jd": "give the Julian date (UTC), e.g. 2460000.5",
+           "mjd": "give the modified Julian date (UTC), e.g. 60000.0",
+           "time": "give an ISO 8601 date (UTC), e.g. 2023-02-25T00:00:00"}[kind]
+    shown = f"{kind} {text!r}" if kind == "time" else f"{kind} {value!r}"
+    return f"{shown} is not a date between 1582 and 3000: {fix}"
 
 
 def _build(when, mag, err, session, *, title, source, attrs):

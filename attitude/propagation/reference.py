@@ -136,10 +136,10 @@ def checked_rtol(rtol) -> float:
     >>> checked_rtol(0.0)
     Traceback (most recent call last):
     ...
-    attitude.foundations.errors.InvalidStateError: rtol: rtol: expected a number in (0, 1), got 0.0
+    attitude.foundations.errors.InvalidStateError: rtol: expected a number in (0, 1), got 0.0
     """
     if not (isinstance(rtol, (int, float, np.floating)) and 0.0 < float(rtol) < 1.0):
-        raise InvalidStateError(f"rtol: expected a number in (0, 1), got {rtol!r}",
+        raise InvalidStateError(f"expected a number in (0, 1), got {rtol!r}",
                                 key="rtol")
     return float(rtol)
 

@@ -70,6 +70,9 @@ def test_good_scenario_is_parsed_with_units(tmp_path):
     ("[5.0, 0.0, 20.0]", '["x", 0.0, 20.0]', "state.omega_body", "expected numbers"),
     ("[5.0, 0.0, 20.0]", "[nan, 0.0, 20.0]", "state.omega_body", "must be finite"),
     ('netcdf = "out.nc"', "netcdf = 3", "output.netcdf", "expected a string"),
+    # a one-sided bound reads as one (it said "must be within [None, 1.0]")
+    ('step = "10 s"', 'step = "10 s"\nmethod = "integrator"\nrtol = 2.0', "propagation.rtol",
+     r"must be at most 1.0, got 2.0$"),
 ])
 def test_malformed_scenarios_name_the_file_and_key(tmp_path, old, new, key, message):
     assert old in GOOD
@@ -79,6 +82,8 @@ def test_malformed_scenarios_name_the_file_and_key(tmp_path, old, new, key, mess
     text = str(info.value)
     assert text.startswith(f"{path}: {key}: "), text
     assert "\n" not in text
+    last = key.rsplit(".", 1)[-1]
+    assert not info.value.reason.startswith(f"{last}: "), text      # the key said once
 
 
 def test_unreadable_and_invalid_toml(tmp_path):
@@ -86,6 +91,14 @@ def test_unreadable_and_invalid_toml(tmp_path):
         load_scenario(tmp_path / "nope.toml")
     with pytest.raises(att.ScenarioError, match="not valid TOML"):
         load_scenario(write(tmp_path, "[body\nx = 1"))
+    latin = tmp_path / "latin.toml"
+    latin.write_bytes(GOOD.replace("test body", "\xc9ole").encode("latin-1"))
+    with pytest.raises(att.ScenarioError, match=r"not UTF-8 text \(byte 0xc9 at offset "
+                                                r"\d+\); save the scenario as UTF-8"):
+        load_scenario(latin)
+    (tmp_path / "x.toml").mkdir()
+    with pytest.raises(att.ScenarioError, match="is a folder, not a scenario file"):
+        load_scenario(tmp_path / "x.toml")
     with pytest.raises(att.ScenarioError, match="body: give exactly one of"):
         load_scenario(write(tmp_path, GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
                                                    "")))
@@ -307,6 +320,8 @@ def test_bad_expectations_name_the_key(tmp_path, expect, key, message):
     text = str(info.value)
     assert text.startswith(f"{path}: {key}: "), text
     assert "\n" not in text
+    last = key.rsplit(".", 1)[-1]
+    assert not info.value.reason.startswith(f"{last}: "), text      # the key said once
 
 
 # --- [state] spin_axis -----------------------------------------------------------------------

@@ -280,3 +280,34 @@ def test_attitude_fit_bad_observations_exit_2(tmp_path, capsys):
     assert main(["fit", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
     assert "observations.attitude.file" in err and "qw" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("text, words", [
+    ("", ["empty file", "qw"]),                                   # numpy warned, then crashed
+    ("# only a comment\n", ["empty file"]),
+    ("t,qx,qy,qz,qw\n", ["no samples after the header"]),
+    ("t,qx,qy,qz,qw\n0,0,0,0,1\n1,\"\",0,0,1\n", ["line 3", "not a number"]),   # a text field
+    ("t,qx,qy,qz,qw\n0,0,0,0,1\n1,0.1,x#!,0,1\n", ["line 3", "not a number"]),
+    ("t,qx,qy,qz,qw\n0,0,0,0,1\n1,0,0,0\n", ["line 3", "expected 5 fields"]),
+    ("t,qx,qy,qz,qw\nnan,0,0,0,1\n", ["line 2", "not finite"]),
+    ("t,qx,qy,qz,qw\n0,0,0,1e999,1\n", ["line 2", "not finite"]),
+    ("t,qx,qy,qz,qw\n0,0,0,0,0\n", ["line 2", "quaternion is zero"]),
+    ("time,qx,qy,qz,qw\n2026-11-25T00:00:00,0,0,0,1\n2026-13-25,0,0,0,1\n",
+     ["line 3", "ISO 8601"]),
+    (b"t,qx,qy,qz,qw\n0,0,0,0,1\n\x00\xff\xfe\n", ["line 3", "expected 5 fields"]),
+])
+def test_a_broken_samples_file_is_one_keyed_error_naming_the_line(tmp_path, text, words):
+    """Each broken quaternion file: a ScenarioError keyed observations.attitude.file
+    that names the file (and the line), with no warning of numpy on the way."""
+    import warnings
+
+    from attitude.fitting.config import parse_observations
+    from attitude.foundations.errors import ScenarioError
+    (tmp_path / "q.csv").write_bytes(text if isinstance(text, bytes) else text.encode())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ScenarioError) as err:
+            parse_observations({"attitude": {"file": "q.csv", "sigma": 1e-3}}, tmp_path,
+                               tmp_path / "fit.toml")
+    assert err.value.key == "observations.attitude.file"
+    assert "q.csv" in err.value.reason and all(w in err.value.reason for w in words)

@@ -50,3 +50,24 @@ def test_the_top_level_classes_are_the_ones_raised():
     with pytest.warns(att.InvalidBodiesWarning):
         att.Ensemble.from_arrays(principal_moments=[[1.0, 1.0, 3.0]],
                                  omega_body=[[0.0, 0.0, 1.0]], epoch="2030-01-01")
+
+
+@pytest.mark.parametrize("message, key, line", [
+    ("rtol: expected a number in (0, 1)", "rtol", "rtol: expected a number in (0, 1)"),
+    ("rtol: too large", "propagation.rtol", "propagation.rtol: too large"),   # last part
+    ("propagation.rtol: too large", "propagation.rtol", "propagation.rtol: too large"),
+    ("rtolerance: x", "rtol", "rtol: rtolerance: x"),        # another word: kept
+    ("rtol is 2", "rtol", "rtol: rtol is 2"),                 # a sentence: kept
+])
+def test_a_message_names_its_key_once(message, key, line):
+    err = att.AttitudeError(message, key=key)
+    assert str(err) == line and err.reason == line.split(": ", 1)[1]
+
+
+def test_the_rtol_of_propagate_is_named_once():
+    body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    state = att.AttitudeState("2030-01-01", Rotation.identity(), [0.1, 0.0, 0.2])
+    with pytest.raises(att.InvalidStateError) as info:
+        att.propagate(body, state, [0.0, 1.0], method="integrator", rtol=0.0)
+    assert str(info.value).startswith("rtol: expected a number in (0, 1)")
+    assert str(info.value).count("rtol") == 1

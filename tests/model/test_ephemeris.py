@@ -176,3 +176,22 @@ def test_input_arrays_are_not_modified():
     w = np.array([0.1, 0.2, 0.3])
     state = att.AttitudeState("2030-01-01", Rotation.identity(), w)
     assert w.flags.writeable and state.omega_body is not w
+
+
+def test_a_damaged_netcdf_file_is_a_format_error(eph, tmp_path):
+    """Each 512-byte block of a written ephemeris zeroed in turn: reading gives the
+    ephemeris or an EphemerisFormatError naming the file, never netCDF4's bare
+    RuntimeError ("NetCDF: HDF error", raised when a damaged chunk is decompressed)."""
+    path = tmp_path / "eph.nc"
+    eph.to_netcdf(path)
+    data = path.read_bytes()
+    damaged, refused = tmp_path / "damaged.nc", 0
+    for start in range(0, len(data), 512):
+        damaged.write_bytes(data[:start] + bytes(min(512, len(data) - start))
+                            + data[start + 512:])
+        try:
+            att.Ephemeris.from_netcdf(damaged)
+        except att.EphemerisFormatError as err:
+            assert str(damaged) in str(err)
+            refused += 1
+    assert refused > 0

@@ -543,3 +543,17 @@ def test_classify_ensemble_reads_a_dask_backed_ephemeris_one_chunk_at_a_time(mon
     for name in ("confidence", "margin"):
         np.testing.assert_allclose(lazy[name].values, eager[name].values, rtol=1e-9,
                                    atol=1e-9 * np.nanmax(np.abs(eager[name].values)))
+
+
+def test_an_infinite_table_value_is_an_invalid_row_without_a_numpy_warning():
+    """A damaged moment (1e999 reads as inf) marks its row invalid, as NaN does, instead
+    of numpy's "invalid value encountered in multiply" from inf * 0 in the tensor."""
+    from attitude.model.tables import ensemble_columns
+    text = "A,B,C,wx,wy,wz\n1,2,3,0,0,1\n1,1e999,3,0,0,1\n"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        inertia, _, _, _ = ensemble_columns(io.StringIO(text))
+        with pytest.warns(att.InvalidBodiesWarning):
+            ens = att.Ensemble.from_table(io.StringIO(text), epoch="2030-01-01")
+    assert np.isnan(inertia[1, 1, 1]) and np.all(np.isfinite(inertia[0]))
+    assert sorted(ens.invalid) == [1]

@@ -3,6 +3,7 @@ light-time and session handling and an error naming the line for each malformati
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -57,7 +58,10 @@ def test_read_lightcurve_dispatches_and_round_trips(tmp_path):
     ("STARTMETADATA\nENDMETADATA\nDATA=2456318.5|15.0|0.01\n", 3, "not closed"),
     ("STARTMETADATA\nENDMETADATA\nENDDATA\n", 3, "no DATA lines"),
     ("STARTMETADATA\nSTARTMETADATA\n", 2, "inside the block"),
-    ("STARTMETADATA\nLTCDAYS=soon\nENDMETADATA\nDATA=1|2|0.1\nENDDATA\n", 5, "LTCDAYS"),
+    ("STARTMETADATA\nLTCDAYS=soon\nENDMETADATA\nDATA=2456318.5|2|0.1\nENDDATA\n", 5,
+     "LTCDAYS"),
+    ("STARTMETADATA\nENDMETADATA\nDATA=1e-320|15.0|0.01\nENDDATA\n", 3,
+     "jd 1e-320 is not a date between 1582 and 3000"),          # a damaged JD
 ])
 def test_alcdef_errors_name_the_line(tmp_path, text, line, match):
     path = tmp_path / "bad.alcdef"
@@ -72,12 +76,21 @@ def test_alcdef_errors_name_the_line(tmp_path, text, line, match):
     ("jd,mag\n2460000.5,abc\n", "line 2: not a number"),
     ("jd,mag\n2460000.5,1.0,3\n", "line 2: expected 2 fields"),
     ("jd,mag\n", "no data rows"),
+    # damaged times: astropy would take them for year -4712 (and warn) or refuse them
+    ("jd,mag\n2460000.5,1.0\n1e-320,1.1\n", "line 3: jd 1e-320 is not a date between"),
+    ("mjd,mag\n-1e6,1.0\n", "line 2: mjd -1000000.0 is not a date"),
+    ("jd,mag\n1e999,1.0\n", "line 2: non-finite value"),
+    ("jd,mag\nnan,1.0\n", "line 2: non-finite value"),
+    ("jd,mag\n2460000.5,nan\n", "line 2: non-finite value"),
+    ("time,mag\n0001-01-01T00:00:00,1.0\n", "line 2: time '0001-01-01T00:00:00' is not a"),
 ])
 def test_csv_errors(tmp_path, text, match):
     path = tmp_path / "bad.csv"
     path.write_text(text)
-    with pytest.raises(LightcurveFormatError, match=match):
-        read_lightcurve(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")            # and no warning of astropy/ERFA first
+        with pytest.raises(LightcurveFormatError, match=match):
+            read_lightcurve(path)
 
 
 def test_unknown_format(tmp_path):

@@ -5,13 +5,12 @@ from __future__ import annotations
 import os
 import sys
 import time
-import tomllib
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from ...foundations.errors import AttitudeError, PropagationError
 from ...photometry.config import run_lightcurve  # photometry (issue 15)
-from ..scenario import load_scenario, run_scenario
+from ..scenario import load_scenario, read_scenario_toml, run_scenario
 from .common import (
     EXIT_EXPECTATION,
     EXIT_INPUT,
@@ -27,15 +26,18 @@ __all__ = []
 
 
 def _check_targets(paths) -> tuple[list[Path], list[str]]:
-    """Scenario files named by ``paths`` (files, or folders searched for ``*.toml``)."""
+    """Scenario files named by ``paths`` (files, or folders searched for ``*.toml``).
+
+    Everything a folder holds under a ``*.toml`` name is a target, not only regular files:
+    a folder or a pipe named ``x.toml`` is then reported as an error of its own."""
     files, errors = [], []
     for p in map(Path, paths):
         if p.is_dir():
-            found = sorted(f for f in p.rglob("*.toml") if f.is_file())
+            found = sorted(p.rglob("*.toml"))
             if not found:
                 errors.append(f"{p}: no *.toml scenario files in this folder")
             files.extend(found)
-        elif p.is_file():
+        elif p.exists():
             files.append(p)
         else:
             errors.append(f"{p}: no such file or folder")
@@ -43,43 +45,42 @@ def _check_targets(paths) -> tuple[list[Path], list[str]]:
 
 
 def _check_one(path: str) -> dict:
-    """Run one scenario for ``attitude check`` (in a worker process): a plain dict."""
+    """Run one scenario for ``attitude check`` (in a worker process): a plain dict whose
+    ``status`` is ``ok``, ``skipped`` (no ``[expect]``), ``input`` or ``propagation``.
+    Never raises: a bad file must not stop the others."""
     start = time.perf_counter()
     out = {"path": path, "status": "ok", "expect": [], "message": ""}
     try:
-        with open(path, "rb") as fh:
-            has_expect = isinstance(tomllib.load(fh).get("expect"), dict)
-    except (OSError, tomllib.TOMLDecodeError):
-        has_expect = True          # let load_scenario report it in its own words
-    if not has_expect:
-        out["status"] = "skipped"
-        return out
-    try:
-        result = run_scenario(load_scenario(path), write_outputs=False)
+        _run_one(path, out)
     except PropagationError as exc:
-        out.update(status="propagation", message=str(exc))
+        out.update(status="propagation", message=one_line(exc))
     except (AttitudeError, OSError) as exc:
         out.update(status="input", message=one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a bug: report it, keep checking the others
         out.update(status="propagation",
-                   message=f"{path}: internal error: {type(exc).__name__}: "
-                           f"{one_line(exc)}")
-    else:
-        out["name"] = result.scenario.name
-        out["expect"] = [{k: v for k, v in e.items()} for e in result.expectations]
-        # --- photometry (issue 15): the lightcurve expectations ---
-        if result.scenario.photometry is not None and result.scenario.photometry.expect:
-            try:
-                lc_run = run_lightcurve(result.scenario, result.scenario.photometry,
-                                        write=False)
-                out["expect"].extend(lc_run.expect)
-            except AttitudeError as exc:
-                out.update(status="input", message=str(exc))
-        # --- end photometry ---
-    if out["message"] and path not in out["message"]:
+                   message=f"internal error: {type(exc).__name__}: {one_line(exc)}")
+    if out["status"] != "ok":
+        out["expect"] = []
+    if out["message"] and not out["message"].startswith(path):
         out["message"] = f"{path}: {out['message']}"
     out["seconds"] = time.perf_counter() - start
     return out
+
+
+def _run_one(path: str, out: dict) -> None:
+    """Fill ``out`` with the expectations of the scenario at ``path`` (raises on bad
+    input or a failed propagation)."""
+    if not isinstance(read_scenario_toml(path).get("expect"), dict):
+        out["status"] = "skipped"
+        return
+    result = run_scenario(load_scenario(path), write_outputs=False)
+    out["name"] = result.scenario.name
+    out["expect"] = [dict(e) for e in result.expectations]
+    # --- photometry (issue 15): the lightcurve expectations ---
+    photometry = result.scenario.photometry
+    if photometry is not None and photometry.expect:
+        out["expect"].extend(run_lightcurve(result.scenario, photometry, write=False).expect)
+    # --- end photometry ---
 
 
 def _check_line(path: str, e: dict) -> str:
@@ -112,15 +113,16 @@ def command(args) -> int:
         pool = ProcessPoolExecutor(max_workers=min(jobs, len(names)))
         results = pool.map(_check_one, names)
     passed = failed = checked = 0
+    bad = len(errors)
     worst = EXIT_INPUT if errors else EXIT_OK
     try:
         for res in results:     # in the order given, each as soon as it is done
             if res["status"] == "skipped":
                 continue
             checked += 1
-            if res["status"] != "ok":
+            if res["status"] != "ok":      # one line, on stderr, naming the file
                 print(f"attitude: error: {res['message']}", file=sys.stderr)
-                print(f"ERROR {res['path']}: {res['message']}")
+                bad += 1
                 code = EXIT_INPUT if res["status"] == "input" else EXIT_PROPAGATION
                 worst = EXIT_INPUT if EXIT_INPUT in (worst, code) else max(worst, code)
                 continue
@@ -138,7 +140,8 @@ def command(args) -> int:
         print("attitude: error: no scenario with an [expect] table in "
               + ", ".join(args.paths), file=sys.stderr)
         return EXIT_INPUT
-    print(f"{passed} passed, {failed} failed ({checked} scenarios in "
+    errored = f", {bad} error{'s' if bad > 1 else ''}" if bad else ""
+    print(f"{passed} passed, {failed} failed{errored} ({checked} scenarios in "
           f"{time.perf_counter() - start:.1f} s)")
     if worst != EXIT_OK:
         return worst
