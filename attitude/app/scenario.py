@@ -20,13 +20,12 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 from ..analysis import statistics
 from ..analysis.classification import classify
-from ..analysis.diagnostics import DIAGNOSTIC_VARIABLES, SCALAR_DIAGNOSTICS, add_diagnostics
+from ..analysis.diagnostics import add_diagnostics
 from ..analysis.spindown import spin_trend
 from ..fitting.config import parse_observations
 from ..foundations.errors import (
@@ -55,6 +54,7 @@ from ..propagation.batch import STATUS_FAILED, STATUS_OK
 from ..propagation.events import nutation_crossing
 from ..propagation.propagator import propagate
 from ..spinorbit import section as spinorbit_section  # [section], spin-orbit [expect]
+from .expectations import check_expectations, known_variables, needs_dataset
 from .scenario_spec import (
     CONSERVATION_KEYS,
     EXPECT_KEYS,
@@ -697,35 +697,6 @@ def _compute(*objects):
     return dask.compute(*objects)
 
 
-#: Variables of the base ephemeris dataset (docs/states_and_ephemerides.md) and their units.
-BASE_VARIABLES = {"quaternion": "1", "angular_velocity": "rad s-1",
-                  "angular_momentum": "kg m2 s-1", "kinetic_energy": "J"}
-
-
-def known_variables() -> dict[str, tuple[str, bool]]:
-    """Variables ``[expect.variables]`` may name: ``{name: (units, is_time_series)}``.
-
-    The base dataset (``quaternion``, ``angular_velocity``, ``angular_momentum``,
-    ``kinetic_energy``), the time series of :func:`attitude.analysis.diagnostics.add_diagnostics`
-    (:data:`~attitude.analysis.diagnostics.DIAGNOSTIC_VARIABLES`) and its scalars (conservation
-    figures, ``attitude_noise``, measured periods ``period_<key>`` and their
-    ``period_<key>_uncertainty``).
-
-    Examples
-    --------
-    >>> variables = known_variables()
-    >>> variables["kinetic_energy"], variables["period_polhode"]   # (units, time series?)
-    (('J', True), ('s', False))
-    """
-    out = {k: (v, True) for k, v in BASE_VARIABLES.items()}
-    out.update({k: (v[0], True) for k, v in DIAGNOSTIC_VARIABLES.items()})
-    out.update({name: (units, False) for name, units, _ in SCALAR_DIAGNOSTICS.values()})
-    for key in PERIOD_KEYS:
-        out[f"period_{key}"] = ("s", False)
-        out[f"period_{key}_uncertainty"] = ("s", False)
-    return out
-
-
 def _parse_nutation_range(r: _Reader, spec: dict, where: str) -> list[Expectation]:
     """``{ min = .., max = .., unit = "deg", abs_tol = .. }`` -> two expectations
     ``nutation_range.min`` and ``nutation_range.max`` (in ``unit``, default rad)."""
@@ -821,126 +792,6 @@ def _parse_expect(r: _Reader, table: dict) -> tuple[Expectation, ...]:
             parsed.extend(Expectation.from_table(f"regime_fractions.{regime}", frac)
                           for regime, frac in spec.items())
     return tuple(parsed)
-
-
-def needs_dataset(scenario: Scenario) -> str | None:
-    """Whether checking the expectations needs :func:`add_diagnostics` of the run:
-    ``None`` (no), ``"base"`` (base variables only), ``"diagnostics"`` or ``"periods"``."""
-    need = None
-    base = set(BASE_VARIABLES)
-    for e in scenario.expect:
-        variable = e.option("variable")
-        if e.key.startswith("nutation_range.") and scenario.torques:
-            need = need or "diagnostics"
-        elif variable is not None:
-            if variable.startswith("period_"):
-                return "periods"
-            if variable not in base:
-                need = "diagnostics"
-            elif need is None:
-                need = "base"
-    return need
-
-
-def _reduce(data: np.ndarray, at: str | None) -> float:
-    if at is None:
-        return float(data)
-    if at == "start":
-        return float(data[0])
-    if at == "end":
-        return float(data[-1])
-    return float(getattr(np, {"max": "nanmax", "min": "nanmin", "mean": "nanmean"}[at])(data))
-
-
-def _variable_value(dataset, e: Expectation) -> float | None:
-    """The reduced value of one ``[expect.variables]`` entry in its expected unit."""
-    if dataset is None or e.option("variable") not in dataset:
-        return None
-    var = dataset[e.option("variable")]
-    data = np.asarray(var.values, dtype=float)
-    comp = e.option("component")
-    if comp == "norm":
-        data = np.linalg.norm(data, axis=-1)
-    elif comp is not None:
-        data = data[..., comp]
-    got = _reduce(data, e.option("at"))
-    units = var.attrs.get("units", "1")
-    return float((got * u.Unit(units)).to_value(e.unit))
-
-
-def check_expectations(scenario: Scenario, regime: str | None, periods: dict,
-                       conservation: dict, *, diagnosis=None, dataset=None,
-                       fractions: dict | None = None,
-                       spinorbit: dict | None = None, spin=None) -> list[dict]:
-    """Compare the parsed ``[expect]`` entries with what the run gave.
-
-    ``diagnosis`` (:func:`attitude.diagnose` of the initial state) gives the nutation range
-    of a torque-free run; ``dataset`` (the run's ephemeris dataset, with the variables of
-    :func:`attitude.analysis.diagnostics.add_diagnostics` when :func:`needs_dataset` says so) the
-    nutation range of a run with torques (extremes of ``nutation_angle`` over the run) and
-    the ``[expect.variables]`` values; ``spin`` (:class:`attitude.analysis.spindown.SpinTrend`)
-    the spin period and its trend.  Without them those entries get ``got = None``
-    (a failure).
-
-    Examples
-    --------
-    >>> sc = load_scenario("scenarios/dzhanibekov.toml")    # expects SAM, polhode 3.3108 s
-    >>> drift = {"angular_momentum_rel_drift": 1e-15, "energy_rel_drift": 1e-15}
-    >>> results = check_expectations(sc, "SAM", {"polhode": 3.5}, drift)
-    >>> [r["key"] for r in results if not r["ok"]]            # 3.5 s is off by 6 %
-    ['polhode']
-    >>> len(results)
-    4
-    >>> round(results[1]["tolerance"], 8)                       # rel_tol 1e-4 of 3.3108 s
-    0.00033108
-    """
-    results = []
-    for e in scenario.expect:
-        key = e.key
-        if key == "resonance":                        # spin-orbit wing: a "p:q" string
-            got = (spinorbit or {}).get(key)
-        elif key == "regime":
-            got = regime
-        elif key in PERIOD_KEYS:
-            got = periods.get(key)
-            got = None if got is None else got / u.Unit(e.unit).to(u.s)
-        elif key.startswith("nutation_range."):
-            got = _nutation_bound(scenario, key.rsplit(".", 1)[1], diagnosis, dataset)
-            got = None if got is None else float((got * u.rad).to_value(e.unit))
-        elif key.startswith("variables."):
-            got = _variable_value(dataset, e)
-        elif key.startswith("regime_fractions."):
-            got = None if fractions is None else fractions.get(key.split(".", 1)[1], 0.0)
-        elif key == "libration_amplitude":            # spin-orbit wing
-            got = (spinorbit or {}).get(key)
-        elif key in SPIN_EXPECT_KEYS:                 # issue 17: attitude.spindown
-            got = None if spin is None else _spin_value(spin, e)
-        else:                                         # a conservation bound
-            got = conservation[key]
-        results.append(e.check(got))
-    return results
-
-
-def _spin_value(spin, e: Expectation) -> float:
-    """The spin period (at ``start`` / ``end``), its trend or its e-folding time, in the
-    expectation's unit."""
-    if e.key == "spin_period":
-        seconds = spin.period_start if e.option("at") == "start" else spin.period_end
-        return float((seconds * u.s).to_value(e.unit))
-    if e.key == "spin_period_trend":
-        return float((spin.trend * u.dimensionless_unscaled).to_value(e.unit))
-    return float((spin.efolding * u.s).to_value(e.unit))
-
-
-def _nutation_bound(scenario: Scenario, which: str, diagnosis, dataset) -> float | None:
-    """theta_min / theta_max, rad: analytic (torque-free) or over the run (torques)."""
-    if not scenario.torques:
-        if diagnosis is None or diagnosis.nutation_range is None:
-            return None
-        return float(diagnosis.nutation_range[0 if which == "min" else 1])
-    if dataset is None or "nutation_angle" not in dataset:
-        return None
-    return _reduce(np.asarray(dataset["nutation_angle"].values, dtype=float), which)
 
 
 # --- the format, generated from the spec ------------------------------------------------
