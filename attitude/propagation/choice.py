@@ -43,7 +43,7 @@ import numpy as np
 from ..model.torques import TorqueModel
 from .compiled import NUMBA
 from .kicks import System
-from .stepsize import STEPS_PER_PERIOD, _own_rates, _variation_rates
+from .stepsize import STEPS_PER_PERIOD, torque_rates
 
 __all__ = []
 
@@ -120,14 +120,7 @@ def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torq
     (body frames) over the outputs ``t`` (s from the state's time) under ``torques``."""
     system = System(list(body_list), torques)
     q_p, w_p = system.to_principal(np.asarray(q0, dtype=float), np.asarray(w0, dtype=float))
-    own = np.zeros(system.n)
-    nu = np.zeros(system.n)
-    rate = np.zeros(system.n)          # the step rule's rate (stepsize._step_rates)
-    for model in system.terms:
-        own_m = _own_rates(model, system, 0.0, q_p, w_p)
-        nu_m = _variation_rates(model, system, 0.0, q_p, w_p, 4)
-        own, nu = np.maximum(own, own_m), np.maximum(nu, nu_m)
-        rate = np.maximum(rate, np.maximum(own_m, np.cbrt(nu_m * nu_m * own_m)))
+    own, nu, rate = torque_rates(system, q_p, w_p, 4, 0.0)
     top = float(np.max(rate))
     h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
               if top > 0 and math.isfinite(top) else math.inf)
