@@ -120,25 +120,34 @@ def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torq
     (body frames) over the outputs ``t`` (s from the state's time) under ``torques``."""
     system = System(list(body_list), torques)
     q_p, w_p = system.to_principal(np.asarray(q0, dtype=float), np.asarray(w0, dtype=float))
-    own, nu, rate = torque_rates(system, q_p, w_p, 4, 0.0)
-    top = float(np.max(rate))
-    h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
-              if top > 0 and math.isfinite(top) else math.inf)
-    step = splitting_step(h_rule, float(np.max(nu)), accuracy)
     forward, backward = _spans(t)
     span = forward + backward
     spin = np.sqrt(np.sum(w_p * w_p, axis=1))
+    compiled = NUMBA and _compiled_form_expected(system.terms)
+
+    def splitting_cost(variation: bool):
+        own, nu, rate = torque_rates(system, q_p, w_p, 4, 0.0, variation)
+        top = float(np.max(rate))
+        h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
+                  if top > 0 and math.isfinite(top) else math.inf)
+        h = splitting_step(h_rule, float(np.max(nu)), accuracy)
+        steps = (math.ceil(forward / h) + math.ceil(backward / h) if math.isfinite(h)
+                 else 1)
+        return own, h, system.n * SPLITTING_STEP_COST * (steps + _off_grid(t, h))
+
+    # the torques' own rates first (cheap): the splitting's cost at nu = 0 is a lower
+    # bound (nu only shortens its step); nu (free flows and torque calls) only when
+    # that bound does not settle it
+    own, step, cost_split = splitting_cost(False)
     turns = (spin + own) * span / (2.0 * math.pi)
     rtol = dop853_rtol(turns, accuracy)
-
-    steps_split = (math.ceil(forward / step) + math.ceil(backward / step)
-                   if math.isfinite(step) else 1)
-    cost_split = system.n * SPLITTING_STEP_COST * (steps_split + _off_grid(t, step))
     steps_dop = DOP853_STEPS_PER_RADIAN * rtol ** -0.125 * 2.0 * math.pi * turns + 1.0
     outputs = np.unique(t).size
     cost_dop = float(np.sum(steps_dop + 0.25 * np.minimum(outputs, steps_dop)))
+    if not (compiled and cost_dop <= cost_split):
+        own, step, cost_split = splitting_cost(True)
 
-    if not NUMBA or not _compiled_form_expected(system.terms):
+    if not compiled:
         why = ("numba is not installed" if not NUMBA
                else "a torque model has no compiled form")
         return Choice("splitting", f"{why}: the splitting (numpy path) at its step rule, "
@@ -149,9 +158,12 @@ def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torq
     if cost_dop <= cost_split:
         return Choice("integrator", f"{pace}: compiled DOP853 at rtol {rtol:.2g} "
                       f"(~{cost_dop:.3g} step-costs) is cheaper than the splitting at "
-                      f"step {step:.3g} s (~{cost_split:.3g}) for ~{accuracy:g} rad",
+                      f"step {step:.3g} s or less (~{cost_split:.3g} or more) for "
+                      f"~{accuracy:g} rad",
                       rtol=rtol, cost_integrator=cost_dop, cost_splitting=cost_split)
     return Choice("splitting", f"{pace}: the compiled splitting at step {step:.3g} s "
                   f"(~{cost_split:.3g} step-costs) is cheaper than DOP853 at rtol "
-                  f"{rtol:.2g} (~{cost_dop:.3g}) for ~{accuracy:g} rad", step=step,
+                  f"{rtol:.2g} (~{cost_dop:.3g}) for ~{accuracy:g} rad",
+                  # no torque rate at all: the step rule's own (one free flow) step
+                  step=step if math.isfinite(step) else None,
                   cost_integrator=cost_dop, cost_splitting=cost_split)

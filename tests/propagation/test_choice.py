@@ -125,3 +125,13 @@ def test_automatic_accuracy_against_the_exact_solution():
     w = eph.dataset.angular_velocity.values[:, 2]
     # the rate is linear in t: both methods carry it to round-off of the summed kicks
     np.testing.assert_allclose(w, w0 + m * t / 3.0, rtol=1e-12)
+
+
+def test_a_torque_without_rate_runs():
+    # a zero constant torque: no rate at all, the splitting's step is the whole span
+    state = att.AttitudeState("2030-01-01", Rotation.from_quat(Q0), [0.01, 0.02, 0.03])
+    t = np.linspace(0.0, 100.0, 5)
+    eph = att.propagate(BOX, state, t, torques=[ConstantTorque([0.0, 0.0, 0.0])])
+    free = att.propagate(BOX, state, t)
+    err = np.max((eph.rotation * free.rotation.inv()).magnitude())
+    assert err < 10.0 * AUTO_ACCURACY
