@@ -115,7 +115,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         for the case, each set for the default accuracy, an attitude error of ~1e-8 rad
         over the run (:mod:`attitude.propagation.choice`: DOP853's ``rtol`` and the
         splitting's ``step`` from error models, the cheaper by a count of steps; without
-        numba or with a torque of your own, the splitting).  The ephemeris attributes
+        numba, with a torque of your own, or with ``events``, the splitting at its step
+        rule).  The ephemeris attributes
         ``method`` and ``method_reason`` say which method ran and why.
     rtol : float, optional
         Relative tolerance: of the ``"integrator"`` method (default 1e-13), or, with
@@ -200,7 +201,11 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     t = elapsed_seconds(times, epoch)
     torques = list(torques or [])
     method, reason = _choose_method(method, torques, rtol, step, order)
-    if method == "auto":
+    if method == "auto" and events:
+        # DOP853 with events runs in scipy (not compiled): the splitting, as before
+        method, reason = "splitting", ("events given: the splitting at its step rule "
+                                       "(DOP853's events run in scipy, not compiled)")
+    elif method == "auto":
         choice = choose_method(bodies, q0, w0, t, torques)
         method, reason, rtol, step = choice.method, choice.reason, choice.rtol, choice.step
     if step is not None:

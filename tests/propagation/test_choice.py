@@ -135,3 +135,15 @@ def test_a_torque_without_rate_runs():
     free = att.propagate(BOX, state, t)
     err = np.max((eph.rotation * free.rotation.inv()).magnitude())
     assert err < 10.0 * AUTO_ACCURACY
+
+
+def test_events_keep_the_splitting():
+    # DOP853's events run in scipy: with events the automatic method is the splitting
+    from attitude.propagation.events import Event
+
+    state = att.AttitudeState("2030-01-01", Rotation.from_quat(Q0), np.radians(0.05) * AXIS)
+    ev = Event(lambda t, q, w, body: t - 30.0, name="half")
+    eph = att.propagate(BOX, state, [0.0, 60.0], torques=[GG], events=[ev])
+    assert eph.dataset.attrs["method"] == "splitting"
+    assert "events" in eph.dataset.attrs["method_reason"]
+    assert eph.dataset.attrs["event_count"] == 1
