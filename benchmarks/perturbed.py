@@ -10,7 +10,9 @@ gravity gradient on a 7000 km orbit (e = 0.01, i = 51.6 deg), omega0 = [5e-4, -1
 1.1e-3] rad/s, 17400 s, output every 30 s.
   * attitude: ``att.propagate(body, state, times, torques=[gg], method="splitting",
     order=o, step=h)``, o in (2, 4, 6), h scanned (the largest passing step of each
-    order, then the fastest order); ``rtol=`` too if the splitting method accepts it.
+    order, then the fastest order); ``rtol=`` too if the splitting method accepts it;
+    and ``att.propagate(body, state, times, torques=[gg])`` with nothing else given (the
+    automatic choice: its method, setting and error are recorded).
   * Basilisk: a ``spacecraft.Spacecraft`` hub in the point-mass field of the Earth
     (``gravityEffector``, the same mu) with the ``GravityGradientEffector``, its default
     RK4 integrator at dt scanned (divisors of the output step); the same orbit (r, v at
@@ -43,6 +45,7 @@ folder.  Without Basilisk its rows are skipped, and the output says so.
     python benchmarks/perturbed.py --bsk-python /work/bskvenv/bin/python
     python benchmarks/perturbed.py --quick --no-basilisk     # smoke run, seconds
     python benchmarks/perturbed.py --year                    # case C over a full year
+    python benchmarks/perturbed.py --only-a --json benchmarks/results/perturbed_case_a.json
 
 Writes ``benchmarks/results/perturbed.json`` (``--json`` elsewhere), atomically.
 """
@@ -290,6 +293,44 @@ def scan_integrator(body, state, times, torques, q_ref, scan):
     return []
 
 
+def automatic(body, state, times, torques, q_ref):
+    """``att.propagate(body, state, times, torques=...)`` with nothing else given: the
+    method and setting it chose (attitude/propagation/choice.py), its error, timed."""
+    def run():
+        return att.propagate(body, state, times, torques=torques)
+
+    wall, eph = best_of(run)
+    reason = eph.dataset.attrs["method_reason"]
+    setting = reason.split(": ", 1)[1].split(" (")[0] if ": " in reason else reason
+    # no "kwargs": case B takes case A's explicit settings only
+    return row("attitude, automatic (nothing given)", setting,
+               attitude_error(quaternions(eph), q_ref), wall,
+               method=eph.dataset.attrs["method"], reason=reason)
+
+
+def matched_accuracy(a):
+    """Basilisk at each of our rows' own accuracy: its cheapest dt of the scan whose
+    error is at most the row's (recorded as ``basilisk_matched``), printed."""
+    scan = a.get("basilisk_scan") or []
+    print("\nBasilisk at each row's own accuracy (its cheapest dt with error <= ours):")
+    for r in a["rows"]:
+        if not (r["wall_time_s"] and r["tool"].startswith("attitude")):
+            continue
+        ok = [s for s in scan if s["error_rad"] <= r["error_rad"]]
+        if not ok:
+            print(f"  {r['tool']}, {r['setting']}: no dt of the scan reaches "
+                  f"{r['error_rad']:.1e} rad")
+            continue
+        s = min(ok, key=lambda s: s["exec_s"])
+        r["basilisk_matched"] = {"dt_s": s["dt_s"], "error_rad": s["error_rad"],
+                                 "ratio_exec": s["exec_s"] / r["wall_time_s"],
+                                 "ratio_total": s["total_s"] / r["wall_time_s"]}
+        print(f"  {r['tool']}, {r['setting']} ({r['error_rad']:.1e} rad): Basilisk dt "
+              f"{s['dt_s']:g} s ({s['error_rad']:.1e} rad) takes "
+              f"{r['basilisk_matched']['ratio_exec']:.3g}x ours (execution alone), "
+              f"{r['basilisk_matched']['ratio_total']:.3g}x with building")
+
+
 def case_a(args, bsk_python, note):
     span = 3000.0 if args.quick else 17400.0
     body, orbit, state, times = case_a_setup(span, 30.0)
@@ -305,6 +346,7 @@ def case_a(args, bsk_python, note):
     ours, scan = scan_ours(body, state, times, [gg], q_ref, orders=orders, steps=steps,
                            note=note)
     ours += scan_integrator(body, state, times, [gg], q_ref, scan)
+    ours.append(automatic(body, state, times, [gg], q_ref))
     passing = [r for r in ours if r["wall_time_s"] is not None]
     best = min(passing, key=lambda r: r["wall_time_s"]) if passing else None
     result = {"span_s": span, "output_step_s": 30.0, "rows": list(ours), "scan": scan}
@@ -647,6 +689,8 @@ def parse_args(argv=None):
     p.add_argument("--check-bodies", type=int, default=20,
                    help="case B: bodies checked against DOP853 (default 20)")
     p.add_argument("--skip-legacy", action="store_true", help="skip case D")
+    p.add_argument("--only-a", action="store_true",
+                   help="case A alone (cases B, C and D are skipped; their records are None)")
     p.add_argument("--json", default=str(HERE / "results" / "perturbed.json"),
                    help="where to write the results (default benchmarks/results/perturbed.json)")
     args = p.parse_args(argv)
@@ -663,9 +707,10 @@ def main(argv=None):
           else f"Basilisk: ABSENT, its rows are skipped: {bsk_info}")
     notes = []
     a, best_a, bsk_a, _ = case_a(args, bsk_python, notes)
-    b = case_b(args, bsk_python, a["rows"], bsk_a, a.get("basilisk_dts", []), notes)
-    c = case_c(args, notes)
-    d = None if (args.quick or args.skip_legacy) else case_d()
+    b = (None if args.only_a else
+         case_b(args, bsk_python, a["rows"], bsk_a, a.get("basilisk_dts", []), notes))
+    c = None if args.only_a else case_c(args, notes)
+    d = None if (args.quick or args.skip_legacy or args.only_a) else case_d()
     info = versions(bsk_version)
 
     print(f"\nmachine: {info['cpu']}, {info['cores']} cores; Python {info['python']}, numpy "
@@ -689,19 +734,22 @@ def main(argv=None):
                 r["basilisk_ratio_total"] = bsk_a["total_s"] / r["wall_time_s"]
                 print(f"  {r['tool']}, {r['setting']}: {r['basilisk_ratio_exec']:.3g} / "
                       f"{r['basilisk_ratio_total']:.3g}")
-    print_table(f"B. {b['bodies']} bodies, {b['span_s']:g} s (errors: the first "
-                f"{b['checked_bodies']} bodies vs DOP853)", b["rows"])
-    if "ratio_total" in b:
+        matched_accuracy(a)
+    if b:
+        print_table(f"B. {b['bodies']} bodies, {b['span_s']:g} s (errors: the first "
+                    f"{b['checked_bodies']} bodies vs DOP853)", b["rows"])
+    if b and "ratio_total" in b:
         print(f"\n{b['bodies']} Basilisk runs / our one batch: {b['ratio_total']:.3g} "
               f"(Basilisk's execution alone: {b['ratio_exec']:.3g}); > 1 means we are faster")
         for r in b["rows"]:
             if "basilisk_ratio_total" in r:
                 print(f"  {r['tool']}, {r['setting']}: {r['basilisk_ratio_total']:.3g} / "
                       f"{r['basilisk_ratio_exec']:.3g} (executions alone)")
-    print_table(f"C. Envisat-like tumbler, gravity gradient + eddy currents in a tilted "
-                f"dipole (error at the end of the first {c['first_span_s'] / 3600:g} h vs "
-                "DOP853; a year is "
-                f"{c['steps_per_year']:.3g} steps)", c["rows"])
+    if c:
+        print_table(f"C. Envisat-like tumbler, gravity gradient + eddy currents in a "
+                    f"tilted dipole (error at the end of the first "
+                    f"{c['first_span_s'] / 3600:g} h vs DOP853; a year is "
+                    f"{c['steps_per_year']:.3g} steps)", c["rows"])
     if d:
         print_table("D. One day, gravity gradient, 100 kg box, 7000 km circular (issue 6)",
                     d["rows"])

@@ -8,6 +8,11 @@ installed; the loosest passing rtol).  The reference is DOP853 at rtol 1e-13, ch
 against the order-6 splitting at a short step (two different methods: their agreement
 bounds the reference's error, printed).  Times: best of 3 after a warm-up.
 
+Then the automatic choice (``propagate`` with torques and nothing else: the cheaper method
+at the default accuracy, attitude/propagation/choice.py) against each method at its
+cheapest setting of the same scans whose error is at most the automatic result's ("at the
+same accuracy"): ``automatic time / best time`` should stay <= 1.1.
+
     python benchmarks/spin_crossover.py
 
 Writes ``benchmarks/results/spin_crossover.json`` atomically.
@@ -38,8 +43,9 @@ from attitude.propagation.compiled import NUMBA  # noqa: E402
 HERE = Path(__file__).resolve().parent
 TARGET = 1e-6
 RATES_DEG = (1.0, 10.0, 60.0, 360.0)
-STEPS = (600.0, 300.0, 120.0, 60.0, 30.0, 15.0, 10.0, 5.0, 2.0, 1.0, 0.5, 0.2)
-RTOLS = (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
+STEPS = (600.0, 300.0, 120.0, 60.0, 30.0, 20.0, 15.0, 10.0, 7.5, 5.0, 3.0, 2.0, 1.5, 1.0,
+         0.75, 0.5, 0.3, 0.2, 0.15, 0.1)
+RTOLS = (1e-6, 1e-7, 1e-8, 3e-9, 1e-9, 3e-10, 1e-10, 3e-11, 1e-11, 3e-12, 1e-12)
 
 
 def error(eph, q_ref) -> float:
@@ -59,6 +65,18 @@ def one_rate(rate_deg):
     check = att.propagate(body, state, times, torques=torques, method="splitting", order=6,
                           step=min(0.5, 5.0 / rate_deg))
     result = {"rate_deg_s": rate_deg, "reference_vs_order6": error(check, q_ref)}
+
+    def auto():
+        return att.propagate(body, state, times, torques=torques)
+
+    wall, eph = best_of(auto)
+    result["automatic"] = {"method": eph.dataset.attrs["method"],
+                           "reason": eph.dataset.attrs["method_reason"],
+                           "error_rad": error(eph, q_ref), "wall_s": wall}
+    # "the same accuracy": the automatic result's error, or the reference's own
+    # uncertainty (twice its distance to the order-6 splitting) where that is larger
+    same = max(result["automatic"]["error_rad"], 2.0 * result["reference_vs_order6"])
+    result["at_automatic_accuracy"] = cheapest(body, state, times, torques, q_ref, same)
     for h in STEPS:
         def run(s=h):
             return att.propagate(body, state, times, torques=torques, method="splitting",
@@ -78,6 +96,23 @@ def one_rate(rate_deg):
     return result
 
 
+def cheapest(body, state, times, torques, q_ref, target):
+    """Each method at its cheapest setting of the scans with error <= ``target``."""
+    out = {}
+    for name, key, values in (("splitting", "step", STEPS), ("dop853", "rtol", RTOLS)):
+        for v in values:
+            kwargs = ({"method": "splitting", "order": 4, "step": v} if key == "step"
+                      else {"method": "integrator", "rtol": v})
+
+            def run(kw=kwargs):
+                return att.propagate(body, state, times, torques=torques, **kw)
+            err = error(run(), q_ref)
+            if err <= target:
+                out[name] = {key: v, "error_rad": err, "wall_s": best_of(run)[0]}
+                break
+    return out
+
+
 def main():
     rows = []
     print(f"{cpu_name()}, {os.cpu_count()} cores; DOP853 {'compiled' if NUMBA else 'scipy'}")
@@ -93,6 +128,23 @@ def main():
                   if d else "no rtol passes")
         ratio = f"{d['wall_s'] / s['wall_s']:.2g}" if s and d else "n/a"
         print(f"| {rate:g} | {cell_s} | {cell_d} | {ratio} |", flush=True)
+    print("\n| spin (deg/s) | automatic | splitting at its accuracy | DOP853 at its accuracy |"
+          " automatic / best |")
+    print("| ---: | --- | --- | --- | ---: |")
+    for r in rows:
+        a, same = r["automatic"], r["at_automatic_accuracy"]
+        setting = a["reason"].split(": ", 1)[1].split(" (")[0]
+        cells = []
+        for name in ("splitting", "dop853"):
+            c = same.get(name)
+            k = "step" if name == "splitting" else "rtol"
+            cells.append(f"{k} {c[k]:g}: {c['error_rad']:.1e} rad, {c['wall_s'] * 1e3:.1f} ms"
+                         if c else "none reaches it")
+        best = min(c["wall_s"] for c in same.values()) if same else float("nan")
+        r["automatic_over_best"] = a["wall_s"] / best
+        print(f"| {r['rate_deg_s']:g} | {setting}: {a['error_rad']:.1e} rad, "
+              f"{a['wall_s'] * 1e3:.1f} ms | {cells[0]} | {cells[1]} | "
+              f"{r['automatic_over_best']:.2f} |")
     print("\nreference (DOP853 rtol 1e-13) vs the order-6 splitting at a short step: "
           + ", ".join(f"{r['reference_vs_order6']:.1e}" for r in rows) + " rad")
     text = json.dumps({"benchmark": "spin_crossover", "cpu": cpu_name(),

@@ -106,7 +106,8 @@ from ..model.torques.surface_forces import (
 from .compiled import NUMBA, jit_formula
 from .compiled import jit as _jit
 
-__all__ = ["CompiledTorques", "compile_torques", "body_torque", "NUMBA", "TERM_KINDS"]
+__all__ = ["CompiledTorques", "compile_torques", "compile_torques_shared", "body_torque",
+           "NUMBA", "TERM_KINDS"]
 
 #: Codes of the terms in ``kinds``.
 TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
@@ -618,7 +619,8 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
     The environment's tables over ``t_span`` are built here, at once, rather than one
     segment at a time as a Python run reaches them: the same SGP4 or IGRF evaluations,
     paid up front (about 1.5 s per day of a TLE orbit at 20 s nodes), and ~12 numbers
-    per node held twice (the table's and the compiled copy: ~0.2 GB for a year).
+    per node held twice (the table's and the compiled copy: ~0.2 GB for a year).  The
+    bodies of a batch share one copy (:func:`compile_torques_shared`).
 
     Examples
     --------
@@ -632,17 +634,23 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
     >>> compile_torques([FunctionTorque(lambda t, q, w, b: 0 * w)], body) is None
     True
     """
+    shared = compile_torques_shared([models], [body], t_span)
+    return None if shared is None else shared[0][0]
+
+
+def _lay_out(models, body, layout: _Layout):
+    """``(names, kinds, offsets)`` of ``models`` on ``body``, their numbers appended to
+    ``layout``; None when one of them has no compiled form."""
     if not isinstance(body, RigidBody):
         raise InvalidStateError(f"expected one RigidBody, got {type(body).__name__}",
                                 key="body")
     if isinstance(models, TorqueModel) or not isinstance(models, Sequence):
         models = [models]
-    layout = _Layout(t_span)
     names, kinds, offsets = [], [], []
     for model in models:
         if not isinstance(model, TorqueModel):
             return None
-        parts = model.compiled_parameters(body, t_span)
+        parts = model.compiled_parameters(body, layout.t_span)
         if parts is None:
             return None
         for kind, values in parts:
@@ -652,8 +660,64 @@ def compile_torques(models, body, t_span=None) -> CompiledTorques | None:
             names.append(kind)
             kinds.append(TERM_KINDS[kind])
             offsets.append(index)
+    return tuple(names), np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64)
+
+
+def compile_torques_shared(groups, bodies, t_span=None
+                           ) -> list[list[CompiledTorques]] | None:
+    """:func:`compile_torques` for several groups of models on several bodies, all in
+    one ``params`` array: each path or field (a TLE orbit's, the Sun's, IGRF's tables)
+    is stored once for the whole batch, and each body adds only its own terms' numbers.
+
+    Parameters
+    ----------
+    groups : sequence of (TorqueModel or sequence of them)
+        The groups of models (the splitting's kick, drag and internal torques; one
+        group for DOP853).
+    bodies : sequence of RigidBody
+    t_span : (float, float), optional
+        As for :func:`compile_torques`.
+
+    Returns
+    -------
+    list of list of CompiledTorques, or None
+        ``[body][group]``, every one with the same (read-only) ``params`` array; None
+        when a model has no compiled form.
+
+    Examples
+    --------
+    >>> from attitude import RigidBody
+    >>> from attitude.model.orbit import KeplerOrbit
+    >>> from attitude.model.torques import GravityGradient
+    >>> gg = GravityGradient(orbit=KeplerOrbit(mu=3.986004418e14, a=7.0e6, e=0.01))
+    >>> bodies = [RigidBody.from_principal_moments(m) for m in ([1, 2, 3], [2, 3, 4])]
+    >>> one = compile_torques([gg], bodies[0])
+    >>> both = compile_torques_shared([[gg]], bodies)
+    >>> both[0][0].params is both[1][0].params       # one array for the batch
+    True
+    >>> both[0][0].params.size - one.params.size     # the second body's own term:
+    12
+    >>> # time shift, mu, inertia (9), the index of the orbit's block (stored once)
+    """
+    layout = _Layout(t_span)
+    rows = []
+    for body in bodies:
+        row = []
+        for models in groups:
+            laid = _lay_out(models, body, layout)
+            if laid is None:
+                return None
+            row.append(laid)
+        rows.append(row)
     params = np.concatenate(layout.blocks) if layout.blocks else np.zeros(0)
-    arrays = [np.array(kinds, dtype=np.int64), np.array(offsets, dtype=np.int64), params]
-    for a in arrays:
-        a.setflags(write=False)
-    return CompiledTorques(*arrays, tuple(names))
+    layout.blocks.clear()
+    params.setflags(write=False)
+    out = []
+    for row in rows:
+        compiled = []
+        for names, kinds, offsets in row:
+            kinds.setflags(write=False)
+            offsets.setflags(write=False)
+            compiled.append(CompiledTorques(kinds, offsets, params, names))
+        out.append(compiled)
+    return out

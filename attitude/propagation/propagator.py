@@ -3,9 +3,10 @@
 Without torques the exact Euler–Poinsot solution is used
 (:mod:`attitude.propagation.torquefree`); with torques the splitting integrator
 (:mod:`attitude.propagation.splitting`: exact free flow and torque kicks, 4th order by
-default), or, with ``method="integrator"`` (or an ``rtol``), the DOP853 reference
-integrator (:mod:`attitude.propagation.reference`); populations run in chunks, locally
-or on dask (:mod:`attitude.propagation.batch`).
+default) or the DOP853 integrator (:mod:`attitude.propagation.reference`), as chosen by
+``method=`` or, without it, by :mod:`attitude.propagation.choice` (the cheaper for the
+case at the default accuracy); populations run in chunks, locally or on dask
+(:mod:`attitude.propagation.batch`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from ..model.ephemeris import Ephemeris
 from ..model.population import Ensemble, check_batch
 from ..model.state import AttitudeState, stack_states
 from .batch import propagate_ensemble
+from .choice import choose_method
 from .events import as_events, locate, name_of
 from .reference import integrate_reference_batch, integrate_reference_events
 from .splitting import choose_step, integrate_splitting, step_count
@@ -108,7 +110,14 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         its own steps; compiled with numba when every torque model is built in,
         :mod:`attitude.propagation.compiled_dop853`, the bodies of a batch on a thread
         per core; else scipy's ``solve_ivp``).  Default: ``"exact"`` without torques;
-        with torques ``"splitting"``, or ``"integrator"`` if ``rtol`` is given.
+        with torques ``"integrator"`` if ``rtol`` is given, ``"splitting"`` if ``step``
+        or ``order`` is, and with none of them the cheaper of the two compiled methods
+        for the case, each set for the default accuracy, an attitude error of ~1e-8 rad
+        over the run (:mod:`attitude.propagation.choice`: DOP853's ``rtol`` and the
+        splitting's ``step`` from error models, the cheaper by a count of steps; without
+        numba, with a torque of your own, or with ``events``, the splitting at its step
+        rule).  The ephemeris attributes
+        ``method`` and ``method_reason`` say which method ran and why.
     rtol : float, optional
         Relative tolerance: of the ``"integrator"`` method (default 1e-13), or, with
         ``method="splitting"``, the error control of the splitting (each step's
@@ -191,7 +200,14 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     bodies, epoch, frame, q0, w0, batch = _as_batch(body, state)
     t = elapsed_seconds(times, epoch)
     torques = list(torques or [])
-    method = _choose_method(method, torques, rtol, step, order)
+    method, reason = _choose_method(method, torques, rtol, step, order)
+    if method == "auto" and events:
+        # DOP853 with events runs in scipy (not compiled): the splitting, as before
+        method, reason = "splitting", ("events given: the splitting at its step rule "
+                                       "(DOP853's events run in scipy, not compiled)")
+    elif method == "auto":
+        choice = choose_method(bodies, q0, w0, t, torques)
+        method, reason, rtol, step = choice.method, choice.reason, choice.rtol, choice.step
     if step is not None:
         step = _step_seconds(step)
     events = as_events(events)
@@ -221,25 +237,40 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         source=f"attitude.propagate, method={method}{_DESCRIPTION[method]}")
     if records is not None:
         eph = _record_events(eph, records, events, batch)
-    return eph
+    return _with_method(eph, method, reason)
 
 
-def _choose_method(method, torques, rtol, step, order) -> str:
+def _with_method(eph: Ephemeris, method: str, reason: str) -> Ephemeris:
+    """The ephemeris with the attributes ``method`` (the one that ran) and
+    ``method_reason`` (why)."""
+    ds = eph.dataset.copy()
+    ds.attrs["method"] = method
+    ds.attrs["method_reason"] = reason
+    return Ephemeris(ds)
+
+
+def _choose_method(method, torques, rtol, step, order) -> tuple[str, str]:
+    """``(method, reason)``; ``"auto"`` when torques come without ``method``, ``rtol``,
+    ``step`` or ``order`` (:func:`attitude.propagation.choice.choose_method` then
+    decides)."""
     if method is None:
         if rtol is not None and (step is not None or order is not None):
             raise InvalidStateError("rtol= belongs to method='integrator', step= and "
                                     "order= to method='splitting': give one of them, or "
                                     "choose the method")
         if not torques:
-            method = "exact"
-        else:
-            method = "integrator" if rtol is not None else "splitting"
+            return "exact", "no torques: the closed-form torque-free solution"
+        if rtol is not None:
+            return "integrator", "rtol= given without method=: DOP853"
+        if step is not None or order is not None:
+            return "splitting", "step= or order= given without method=: the splitting"
+        return "auto", ""
     if method not in METHODS:
         raise InvalidStateError(f"method {method!r} is unknown; choose one of {METHODS}")
     if method == "exact" and torques:
         raise InvalidStateError("method='exact' is the torque-free solution; use "
                                 "method='splitting' or method='integrator' with torques")
-    return method
+    return method, f"method={method!r} given"
 
 
 def _propagate_ensemble(ensemble, times, *, torques, method, rtol, step, order, progress,
@@ -249,7 +280,20 @@ def _propagate_ensemble(ensemble, times, *, torques, method, rtol, step, order, 
                                 "chunks=; propagate the bodies of interest one by one")
     t = elapsed_seconds(times, ensemble.epoch)
     torques = list(torques or [])
-    method = _choose_method(method, torques, rtol, step, order)
+    method, reason = _choose_method(method, torques, rtol, step, order)
+    if method == "auto":
+        valid = np.flatnonzero(ensemble.valid)
+        if valid.size == 0:
+            method, reason = "splitting", "no valid body: the splitting (nothing to run)"
+        else:
+            # the choice on at most _CHOICE_SAMPLE bodies spread over the ensemble
+            pick = valid[np.unique(np.linspace(0, valid.size - 1,
+                                               min(valid.size, _CHOICE_SAMPLE)).astype(int))]
+            choice = choose_method([ensemble.body_at(int(i)) for i in pick],
+                                   ensemble.quaternion[pick], ensemble.omega_body[pick],
+                                   t, torques)
+            method, reason, rtol, step = (choice.method, choice.reason, choice.rtol,
+                                          choice.step)
     options = {}
     if method == "splitting":
         options = {"step": None if step is None else _step_seconds(step),
@@ -258,10 +302,15 @@ def _propagate_ensemble(ensemble, times, *, torques, method, rtol, step, order, 
                    "rtol": rtol}
     elif method == "integrator" and rtol is not None:
         options = {"rtol": rtol}
-    return propagate_ensemble(ensemble, t, method=method, torques=torques, options=options,
-                              client=client, chunks=chunks,
-                              source=f"attitude.propagate, method={method}"
-                                     f"{_DESCRIPTION[method]}")
+    eph = propagate_ensemble(ensemble, t, method=method, torques=torques, options=options,
+                             client=client, chunks=chunks,
+                             source=f"attitude.propagate, method={method}"
+                                    f"{_DESCRIPTION[method]}")
+    return _with_method(eph, method, reason)
+
+
+#: Bodies of an ensemble on which the automatic method is chosen.
+_CHOICE_SAMPLE = 4096
 
 
 def _record_events(eph: Ephemeris, records: list, events: list, batch: bool) -> Ephemeris:

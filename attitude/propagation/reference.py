@@ -31,7 +31,7 @@ from ..model.body import RigidBody
 from ..model.torques import internal_rate
 from . import compiled_dop853
 from .compiled import NUMBA, each_on_cores
-from .compiled_torques import compile_torques
+from .compiled_torques import compile_torques_shared
 from .events import evaluate
 
 __all__ = ["integrate_reference", "integrate_reference_batch", "checked_rtol", "DEFAULT_RTOL",
@@ -153,6 +153,13 @@ def _compiled_form(body: RigidBody, torques, t: np.ndarray, method: str,
                    compiled: bool | None):
     """The torques of :func:`compiled_dop853.dop853_one` (``(external, internal,
     has_internal)``) when the compiled path is chosen and can run, else None."""
+    forms = _compiled_forms([body], torques, t, method, compiled)
+    return None if forms is None else forms[0]
+
+
+def _compiled_forms(bodies, torques, t: np.ndarray, method: str, compiled: bool | None):
+    """:func:`_compiled_form` for each body, all in one ``params`` array (a path or
+    field laid out once for the batch), or None."""
     if compiled is False or (compiled is None and not NUMBA):
         return None
     if method != "DOP853":
@@ -161,19 +168,18 @@ def _compiled_form(body: RigidBody, torques, t: np.ndarray, method: str,
                                     f"{method!r}", key="compiled")
         return None
     span = (float(min(0.0, np.min(t, initial=0.0))), float(max(0.0, np.max(t, initial=0.0))))
-    groups = []
-    for internal in (False, True):
-        models = [m for m in torques if (getattr(m, "internal", False) is True) == internal]
-        c = compile_torques(models, body, t_span=span)
-        if c is None:
-            if compiled:
-                raise InvalidStateError("compiled=True: a torque model has no compiled "
-                                        "form (a Python function or model); use "
-                                        "compiled=None", key="compiled")
-            return None
-        groups.append((c.kinds, c.offsets, c.params))
+    groups = [[m for m in torques if (getattr(m, "internal", False) is True) == internal]
+              for internal in (False, True)]
+    shared = compile_torques_shared(groups, bodies, t_span=span)
+    if shared is None:
+        if compiled:
+            raise InvalidStateError("compiled=True: a torque model has no compiled "
+                                    "form (a Python function or model); use "
+                                    "compiled=None", key="compiled")
+        return None
     has_internal = any(getattr(m, "internal", False) is True for m in torques)
-    return groups[0], groups[1], has_internal
+    return [tuple((c.kinds, c.offsets, c.params) for c in row) + (has_internal,)
+            for row in shared]
 
 
 def _integrate(body, quat0, omega0, t, torques, rtol, atol_scale, method, spec):
@@ -242,9 +248,8 @@ def integrate_reference_batch(bodies: Sequence[RigidBody], quat0, omega0, t, **k
     options = {"torques": (), "rtol": DEFAULT_RTOL, "atol_scale": DEFAULT_ATOL_SCALE,
                "method": "DOP853", "compiled": None} | kwargs
     compiled = options.pop("compiled")
-    specs = [_compiled_form(b, options["torques"], t, options["method"], compiled)
-             for b in bodies]
-    if any(spec is None for spec in specs):
+    specs = _compiled_forms(list(bodies), options["torques"], t, options["method"], compiled)
+    if specs is None:
         # a model without a compiled form: Python torques, one body after the other
         results = [_integrate(b, quat0[i], omega0[i], t, spec=None, **options)
                    for i, b in enumerate(bodies)]

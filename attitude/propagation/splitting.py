@@ -84,7 +84,7 @@ from ..foundations.errors import InvalidStateError, PropagationError
 from ..foundations.progress import Progress, duration_text
 from ..model.body import as_bodies, to_body_frame
 from . import compiled, compiled_loop
-from .compiled_torques import compile_torques
+from .compiled_torques import compile_torques_shared
 
 # The splitting in modules of its own: the exact free flow, the compositions, the bodies
 # and kicks, the step rule; the public names are importable from here as before.
@@ -323,24 +323,17 @@ def _march(stepper: _Stepper, q, w, t0: float, times, store, h: float, *, mode: 
 
 def _compiled_specs(system: System, body_list, t0: float, t: np.ndarray, supported: bool):
     """Per body, the compiled forms of the kick, drag and internal torques, or ``None``
-    if a model has none (or internal torques act together with external ones)."""
+    if a model has none (or internal torques act together with external ones).  The
+    bodies share one ``params`` array: a path or field (a TLE orbit's, the Sun's, IGRF's
+    tables) is laid out once for the whole batch."""
     if not supported or not system.terms:
         return None
     span = (t0 + float(min(0.0, np.min(t))), t0 + float(max(0.0, np.max(t))))
-    specs = []
-    for body in body_list:
-        groups = []
-        for models in (system.kick_terms, system.drag_terms, system.internal_terms):
-            if not models:
-                groups.append((np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-                               np.zeros(0)))
-                continue
-            c = compile_torques(models, body, t_span=span)
-            if c is None:
-                return None
-            groups.append((c.kinds, c.offsets, c.params))
-        specs.append(groups)
-    return specs
+    groups = (system.kick_terms, system.drag_terms, system.internal_terms)
+    shared = compile_torques_shared(groups, body_list, t_span=span)
+    if shared is None:
+        return None
+    return [[(c.kinds, c.offsets, c.params) for c in row] for row in shared]
 
 
 def _run_compiled(system, specs, q_p0, w_p0, t, t0, segments, h, h_limit, expo, mode,

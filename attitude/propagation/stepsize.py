@@ -72,16 +72,27 @@ def _variation_rates(model, system: System, t0: float, q_p, w_p, order: int
     return np.where(ok, np.minimum(nu, spin), 0.0)
 
 
+def torque_rates(system: System, q_p, w_p, order: int = 4, t0: float = 0.0,
+                 variation: bool = True):
+    """``(omega_M, nu, rate)`` per body, each the largest over the models: the torques'
+    own rate, how fast they turn along the free flow, and the step rule's
+    ``max(omega_M, (nu^2 omega_M)^(1/3))`` (see :func:`choose_step`).  With
+    ``variation=False`` ``nu`` is taken as 0 (not measured: the cheap part alone)."""
+    own_max, nu_max, rate = np.zeros(system.n), np.zeros(system.n), np.zeros(system.n)
+    for model in system.terms:
+        own = _own_rates(model, system, t0, q_p, w_p)
+        nu = (_variation_rates(model, system, t0, q_p, w_p, order) if variation
+              else np.zeros(system.n))
+        own_max, nu_max = np.maximum(own_max, own), np.maximum(nu_max, nu)
+        rate = np.maximum(rate, np.maximum(own, np.cbrt(nu * nu * own)))
+    return own_max, nu_max, rate
+
+
 def _step_rates(system: System, q_p, w_p, order: int = 4, t0: float = 0.0
                 ) -> np.ndarray:
     """``max over models of max(omega_M, (nu^2 omega_M)^(1/3))`` per body (see
     :func:`choose_step`)."""
-    rate = np.zeros(system.n)
-    for model in system.terms:
-        own = _own_rates(model, system, t0, q_p, w_p)
-        nu = _variation_rates(model, system, t0, q_p, w_p, order)
-        rate = np.maximum(rate, np.maximum(own, np.cbrt(nu * nu * own)))
-    return rate
+    return torque_rates(system, q_p, w_p, order, t0)[2]
 
 
 def choose_step(bodies, quat0, omega0, torques=(), *, order: int = 4,

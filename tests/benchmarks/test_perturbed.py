@@ -56,6 +56,10 @@ def test_perturbed_benchmark_quick_without_basilisk(tmp_path):
     assert record["quick"] is True and record["basilisk_python"] is None
     a_rows = record["case_A"]["rows"]
     assert a_rows and all(r["error_rad"] <= record["target_rad"] for r in a_rows)
+    # the automatic choice (nothing given) is recorded: its method and why
+    auto = [r for r in a_rows if r["tool"].startswith("attitude, automatic")]
+    assert len(auto) == 1 and auto[0]["method"] in ("splitting", "integrator")
+    assert auto[0]["reason"]
     c = record["case_C"]
     # L . B: each step adds at most SPLITTING_STEP ulp of |L| (tests/tolerances.py)
     steps = c["first_span_s"] / c["step_s"]

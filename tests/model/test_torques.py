@@ -217,7 +217,8 @@ def test_gravity_gradient_conserves_energy_in_a_static_field():
     gg = GravityGradient(MU, ConstantPosition([6.8e6, 1.0e6, -0.5e6]))
     state = att.AttitudeState(EPOCH, Rotation.random(random_state=rng), [3e-4, -2e-4, 1e-4])
     t = np.linspace(0.0, 4000.0, 41)
-    eph = att.propagate(body, state, t, torques=[gg])
+    eph = att.propagate(body, state, t, torques=[gg],
+                        method="splitting")   # its step rule: 1e-10-class
     V = gg.potential(t, eph.dataset["quaternion"].values, body)
     E = eph.dataset["kinetic_energy"].values
     assert np.ptp(V) > 0.5 * E[0]                       # a real exchange of energy
@@ -234,7 +235,8 @@ def test_gravity_gradient_circular_orbit_conserves_jacobi_integral():
     gg = GravityGradient(MU, orbit)
     state = att.AttitudeState(EPOCH, Rotation.random(random_state=rng), [1e-3, -2e-3, 1.5e-3])
     t = np.linspace(0.0, 2 * orbit.period, 101)
-    eph = att.propagate(body, state, t, torques=[gg])
+    eph = att.propagate(body, state, t, torques=[gg],
+                        method="splitting")   # its step rule: 1e-10-class
     V = gg.potential(t, eph.dataset["quaternion"].values, body)
     E = eph.dataset["kinetic_energy"].values
     h = orbit.specific_angular_momentum / np.linalg.norm(orbit.specific_angular_momentum)
@@ -592,7 +594,8 @@ def test_eddy_current_sphere_in_uniform_field_closed_form():
     w0 = np.array([0.3, 0.1, -0.2])
     state = att.AttitudeState(EPOCH, Rotation.from_rotvec([0.2, -0.4, 1.0]), w0)
     t = np.linspace(0.0, 300.0, 31)
-    eph = att.propagate(body, state, t, torques=[model])
+    eph = att.propagate(body, state, t, torques=[model],
+                        method="splitting")   # its step rule: 1e-10-class
     w_in = eph.dataset["angular_momentum"].values / I
     b = B / np.linalg.norm(B)
     w0_in = state.attitude.apply(w0)

@@ -374,15 +374,17 @@ def test_default_step_rule():
 
 
 def test_propagate_method_selection_and_options(capsys, monkeypatch):
-    """Default method with torques is splitting (integrator if rtol is given); step as a
-    Quantity; progress goes to stderr only when asked; bad options are reported."""
+    """Method selection (the automatic choice with torques alone:
+    tests/propagation/test_choice.py; integrator if rtol is given, splitting if step or
+    order is); step as a Quantity; progress goes to stderr only when asked; bad options
+    are reported."""
     body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
     state = att.AttitudeState(EPOCH, Rotation.identity(), [0.01, 0.02, 0.03])
     gg = GravityGradient(MU, [7.0e6, 0.0, 0.0])
     t = [0.0, 60.0]
     assert "method=exact" in att.propagate(body, state, t).dataset.attrs["source"]
-    assert "method=splitting" in att.propagate(body, state, t, torques=[gg]).dataset.attrs[
-        "source"]
+    assert "method=splitting" in att.propagate(body, state, t, torques=[gg],
+                                               order=4).dataset.attrs["source"]
     assert "method=integrator" in att.propagate(body, state, t, torques=[gg],
                                                 rtol=1e-10).dataset.attrs["source"]
     a = att.propagate(body, state, t, torques=[gg], step=1 * u.min, order=2)

@@ -35,12 +35,15 @@ def _summary_rows(result) -> list[tuple[str, str]]:
     """The summary of ``attitude run`` as ``(quantity, value)`` rows, without the
     expectations (one table, plain or rich, is made from them)."""
     sc, eph, d = result.scenario, result.ephemeris, result.diagnosis
-    method = sc.method or ("splitting" if sc.torques else "exact")
+    method = (eph.dataset.attrs.get("method") or sc.method
+              or ("splitting" if sc.torques else "exact"))
     scenario = ("Scenario", f"{sc.name}  ({sc.path})")
     run = ("Run", f"{len(eph)} epochs over {format_seconds(sc.duration)}, step "
                   f"{format_seconds(sc.step)}, method {method}")
+    reason = eph.dataset.attrs.get("method_reason")
+    why = [("Method", f"{method}: {reason}")] if reason else []   # which ran and why
     if result.ensemble is not None:
-        return [scenario] + _ensemble_rows(result, run)
+        return [scenario] + _ensemble_rows(result, run) + why
     body, state = sc.body, sc.state
     A, B, C = body.principal_moments
     w = state.omega_body
@@ -52,7 +55,7 @@ def _summary_rows(result) -> list[tuple[str, str]]:
         ("State", f"epoch {state.epoch.isot} {state.epoch.scale.upper()}, frame {state.frame},"
                   f" |omega| = {wn:.6g} deg/s"),
         run,
-    ]
+    ] + why
     periods = ", ".join(f"{k} {format_seconds(v)}" for k, v in result.periods.items())
     if sc.torques:
         rows.append(("Motion", f"initial state (torque-free): {d.regime}"))

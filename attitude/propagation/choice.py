@@ -1,0 +1,172 @@
+"""The method ``propagate`` runs with torques and no ``method=``: the cheaper of the compiled
+DOP853 and the compiled splitting, each set to a default accuracy.
+
+**The default accuracy** is :data:`AUTO_ACCURACY`, an attitude error of ~1e-8 rad over
+the run (a global error, not a per-step tolerance), from which each method's setting
+follows through an error model fitted on gravity-gradient runs
+(``benchmarks/spin_crossover.py`` and case A of ``benchmarks/perturbed.py``; measured
+values in docs/integrators.md, "The automatic choice"):
+
+* DOP853 (``method="integrator"``): its error grows about as ``rtol N^1.8`` with the
+  number of turns ``N = (|omega| + omega_M) span / 2 pi`` (``omega_M``: the torques'
+  own rate, :meth:`~attitude.model.torques.TorqueModel.characteristic_rate`): the phase
+  error of a non-symplectic method grows quadratically.  ``rtol = AUTO_ACCURACY /
+  (0.25 N^1.8)``, kept within :data:`RTOL_RANGE`, the smallest over a batch's bodies.
+* the splitting (order 4, fixed step): the step rule's step ``h_rule``
+  (:func:`attitude.propagation.stepsize.choose_step`, ``N = 300`` steps per period of
+  the torque's pace) errs by about :data:`SPLITTING_RULE_ERROR` over such runs and the
+  error grows as ``h^4``, so ``h = h_rule (AUTO_ACCURACY / SPLITTING_RULE_ERROR)^(1/4)``
+  (6.7 ``h_rule``), and at most ``1 / nu`` (``nu``: how fast the torque turns along the
+  free motion, at most the spin): the kicks must sample the torque's turning, beyond
+  ``h nu ~ 1.3`` the error jumps by orders of magnitude.
+
+**The cost model** counts DOP853 steps (12 right-hand sides each): DOP853 takes
+``0.18 rtol^(-1/8)`` steps per radian of ``(|omega| + omega_M) t`` (the step counts of
+scipy's DOP853, which the compiled one reproduces), plus a quarter step for each step
+holding an output (its three extra dense-output stages); a splitting step costs
+:data:`SPLITTING_STEP_COST` DOP853 steps and an output inside a step one more step (a
+partial step from the step's start).  The cheaper estimate wins; the run records which
+method ran and why (the ephemeris attributes ``method`` and ``method_reason``).  ``nu``
+costs a few free flows and torque calls (~1 ms in numpy): it is measured only when the
+splitting's cost at ``nu = 0`` (its lower bound) is below DOP853's.  An ensemble is
+judged on at most 4096 of its bodies, spread over it.
+
+Without numba, or with a torque model that has no compiled form, there is no compiled
+method to choose from: the splitting runs at its step rule, as before the choice existed
+(on numpy it advances a whole batch at once).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.torques import TorqueModel
+from .compiled import NUMBA
+from .kicks import System
+from .stepsize import STEPS_PER_PERIOD, torque_rates
+
+__all__ = []
+
+#: Default accuracy of the automatic choice: attitude error over the run, rad.
+AUTO_ACCURACY = 1e-8
+#: DOP853's rtol in the automatic choice stays within this range.
+RTOL_RANGE = (1e-13, 1e-6)
+#: DOP853's error model ``err = C rtol N^P`` (``N`` turns of ``|omega| + omega_M``).
+DOP853_ERROR = (0.25, 1.8)
+#: DOP853 steps per radian of ``(|omega| + omega_M) t``, times ``rtol^(1/8)``.
+DOP853_STEPS_PER_RADIAN = 0.18
+#: Attitude error of the splitting (order 4) at the step rule's step over the
+#: calibration runs, rad (measured 3e-12 to 6e-11 at slow to moderate spins).
+SPLITTING_RULE_ERROR = 5e-12
+#: Largest ``h nu`` of the automatic splitting step.
+SPLITTING_MAX_TURN = 1.0
+#: Cost of one compiled splitting step (order 4: six free flows and kicks) in compiled
+#: DOP853 steps, measured with gravity gradient (``benchmarks/spin_crossover.py``).
+SPLITTING_STEP_COST = 1.7
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The method chosen, its setting (``rtol`` or ``step``) and the reason, with the
+    estimated costs in DOP853 steps."""
+
+    method: str
+    reason: str
+    rtol: float | None = None
+    step: float | None = None
+    cost_integrator: float = math.nan
+    cost_splitting: float = math.nan
+
+
+def _compiled_form_expected(terms) -> bool:
+    """Whether every torque model has a compiled form (a built-in model), without
+    building it (an environment table can take seconds)."""
+    return all(isinstance(m, TorqueModel)
+               and type(m).compiled_parameters is not TorqueModel.compiled_parameters
+               for m in terms)
+
+
+def _spans(t: np.ndarray) -> tuple[float, float]:
+    return float(max(0.0, np.max(t, initial=0.0))), float(-min(0.0, np.min(t, initial=0.0)))
+
+
+def _off_grid(t: np.ndarray, h: float) -> int:
+    """Outputs that fall inside a step of the grid ``k h`` (a partial step each)."""
+    if not math.isfinite(h):
+        return 0
+    x = np.abs(t) / h
+    return int(np.count_nonzero(np.abs(x - np.round(x)) > 1e-9 * np.maximum(x, 1.0)))
+
+
+def dop853_rtol(turns: np.ndarray, accuracy: float = AUTO_ACCURACY) -> float:
+    """DOP853's rtol for ``accuracy`` over ``turns`` (per body; the smallest)."""
+    c, p = DOP853_ERROR
+    rtol = accuracy / (c * np.maximum(np.asarray(turns, dtype=float), 1.0) ** p)
+    return float(np.clip(np.min(rtol), *RTOL_RANGE))
+
+
+def splitting_step(h_rule: float, nu: float, accuracy: float = AUTO_ACCURACY) -> float:
+    """The automatic splitting step, s: the rule's step scaled to ``accuracy`` (error
+    ~ h^4), at most ``SPLITTING_MAX_TURN / nu``."""
+    h = h_rule * (accuracy / SPLITTING_RULE_ERROR) ** 0.25
+    if nu > 0:
+        h = min(h, SPLITTING_MAX_TURN / nu)
+    return h
+
+
+def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torques,
+                  accuracy: float = AUTO_ACCURACY) -> Choice:
+    """The automatic method for bodies ``body_list`` at ``(q0 (N, 4), w0 (N, 3))``
+    (body frames) over the outputs ``t`` (s from the state's time) under ``torques``."""
+    system = System(list(body_list), torques)
+    q_p, w_p = system.to_principal(np.asarray(q0, dtype=float), np.asarray(w0, dtype=float))
+    forward, backward = _spans(t)
+    span = forward + backward
+    spin = np.sqrt(np.sum(w_p * w_p, axis=1))
+    compiled = NUMBA and _compiled_form_expected(system.terms)
+
+    def splitting_cost(variation: bool):
+        own, nu, rate = torque_rates(system, q_p, w_p, 4, 0.0, variation)
+        top = float(np.max(rate))
+        h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
+                  if top > 0 and math.isfinite(top) else math.inf)
+        h = splitting_step(h_rule, float(np.max(nu)), accuracy)
+        steps = (math.ceil(forward / h) + math.ceil(backward / h) if math.isfinite(h)
+                 else 1)
+        return own, h, system.n * SPLITTING_STEP_COST * (steps + _off_grid(t, h))
+
+    # the torques' own rates first (cheap): the splitting's cost at nu = 0 is a lower
+    # bound (nu only shortens its step); nu (free flows and torque calls) only when
+    # that bound does not settle it
+    own, step, cost_split = splitting_cost(False)
+    turns = (spin + own) * span / (2.0 * math.pi)
+    rtol = dop853_rtol(turns, accuracy)
+    steps_dop = DOP853_STEPS_PER_RADIAN * rtol ** -0.125 * 2.0 * math.pi * turns + 1.0
+    outputs = np.unique(t).size
+    cost_dop = float(np.sum(steps_dop + 0.25 * np.minimum(outputs, steps_dop)))
+    if not (compiled and cost_dop <= cost_split):
+        own, step, cost_split = splitting_cost(True)
+
+    if not compiled:
+        why = ("numba is not installed" if not NUMBA
+               else "a torque model has no compiled form")
+        return Choice("splitting", f"{why}: the splitting (numpy path) at its step rule, "
+                      "no compiled method to choose from", cost_integrator=cost_dop,
+                      cost_splitting=cost_split)
+    pace = (f"spin {float(np.max(spin)):.3g} rad/s against the torque's pace "
+            f"{float(np.max(own)):.3g} rad/s")
+    if cost_dop <= cost_split:
+        return Choice("integrator", f"{pace}: compiled DOP853 at rtol {rtol:.2g} "
+                      f"(~{cost_dop:.3g} step-costs) is cheaper than the splitting at "
+                      f"step {step:.3g} s or less (~{cost_split:.3g} or more) for "
+                      f"~{accuracy:g} rad",
+                      rtol=rtol, cost_integrator=cost_dop, cost_splitting=cost_split)
+    return Choice("splitting", f"{pace}: the compiled splitting at step {step:.3g} s "
+                  f"(~{cost_split:.3g} step-costs) is cheaper than DOP853 at rtol "
+                  f"{rtol:.2g} (~{cost_dop:.3g}) for ~{accuracy:g} rad",
+                  # no torque rate at all: the step rule's own (one free flow) step
+                  step=step if math.isfinite(step) else None,
+                  cost_integrator=cost_dop, cost_splitting=cost_split)
