@@ -31,7 +31,8 @@ def test_plain_summary_is_an_aligned_label_value_table(result):
     assert [ln[:11] for ln in lines[:4]] == ["Scenario   ", "Body       ", "State      ",
                                              "Run        "]
     assert all(ln[10] == " " and ln[11] != " " for ln in lines)
-    assert "Motion     regime SAM" in lines[4]
+    assert lines[4].startswith("Method     exact: no torques")
+    assert "Motion     regime SAM" in lines[5]
     assert "Expect     ok   regime: expected SAM, got SAM" in lines
     assert any(ln.startswith("Expect     FAIL precession: expected 1 +/- 0.01 h, got ")
                for ln in lines)
