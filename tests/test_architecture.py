@@ -90,7 +90,10 @@ IMPORTS_BY_NAME = {
     "attitude.foundations.lazy": (None, "the public names of `attitude` and "
                                         "`attitude.formats`, each imported on first use "
                                         "(streaming would load numba); the package "
-                                        "namespaces are outside the cycle test"),
+                                        "namespaces are outside the cycle test; and "
+                                        "lazy.WING_METHODS: Ephemeris.animate/view run "
+                                        "attitude.pictures, a wing the model layer may "
+                                        "not import (imported on the first call)"),
     "attitude.app.cli": ("COMMANDS", "each command's module is imported when it runs, so "
                                      "that `attitude --help` loads no numpy (issue 25)"),
 }
@@ -180,7 +183,8 @@ def test_imports_inside_functions_are_optional_or_costly():
 LAYERS = ("foundations", "model", "propagation", "analysis", "wings", "application")
 
 #: The wings: each imports the layers below and its own modules, not another wing.
-WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit", "inversion")
+WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit", "inversion",
+         "pictures")
 
 #: Wings that build on another wing, with the reason: the only imports between wings.
 WING_USES = {

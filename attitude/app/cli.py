@@ -36,7 +36,8 @@ __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_EXPECTATION", "E
 #: Command name -> the module that runs it (its ``command(args) -> int``), imported when
 #: the command runs (never for ``--help``).
 COMMANDS = {name: f"attitude.app.commands.{name}" for name in (
-    "run", "check", "classify", "convert", "section", "fit", "lightcurve", "invert")}
+    "run", "check", "classify", "convert", "section", "fit", "lightcurve", "invert",
+    "animate", "view")}
 
 _RUN_HELP = """\
 Propagate the scenario, print a summary and write its outputs.
@@ -210,6 +211,34 @@ fit. The [expect] keys period, pole, rms and dark_facet are checked.
 Exit codes: 0 success, 1 an expectation failed, 2 bad input.
 """
 
+_ANIMATE_HELP = """\
+Write a movie of an ephemeris: the body turning (its equivalent inertia ellipsoid, or the
+OBJ named by the attribute shape_model) with its axes, L and omega; Poinsot's
+construction in step (the energy ellipsoid rolling on the invariable plane, polhode and
+herpolhode traced as they go); the rates and nutation angle against time.  Frames are
+spaced from the motion's periods (three turns of the longest, 24 frames per shortest)
+unless --duration says how long.  MP4 needs imageio-ffmpeg, GIF Pillow:
+pip install 'attitude-dynamics[pictures]'.  See docs/pictures.md.
+
+  attitude run scenarios/apophis.toml
+  attitude animate scenarios/apophis.nc -o apophis.mp4 --duration 20
+  attitude animate scenarios/apophis.nc -o apophis.gif --fps 10 --duration 6 --dpi 50
+
+Exit codes: 0 written, 2 bad input (missing file, unknown suffix).
+"""
+
+_VIEW_HELP = """\
+Write an interactive 3D view of an ephemeris: one self-contained HTML file (plotly.js
+embedded: no server, no network) to open in a browser: rotate and zoom the scenes,
+play/pause and a time slider; the body, its axes, L, omega, Poinsot's construction,
+the rates and nutation, and for an ensemble the cloud of L directions.  Needs plotly:
+pip install 'attitude-dynamics[pictures]'.  See docs/pictures.md.
+
+  attitude view scenarios/apophis.nc -o apophis.html
+
+Exit codes: 0 written, 2 bad input (missing file, unknown suffix).
+"""
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``attitude`` command's parser: every command, its options and its help, built
@@ -342,6 +371,35 @@ def build_parser() -> argparse.ArgumentParser:
                            "scenario's stem)")
     invp.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
     invp.add_argument("--quiet", action="store_true", help="print nothing on success")
+    # --- pictures (issue 29) ---
+    anim = sub.add_parser("animate", help="a movie of an ephemeris (MP4 or GIF)",
+                          description=_ANIMATE_HELP,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+    anim.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
+    anim.add_argument("-o", "--output", required=True, metavar="OUT.mp4|OUT.gif",
+                      help="the movie (.mp4 or .gif)")
+    anim.add_argument("--fps", type=float, default=20.0, metavar="N",
+                      help="frames per second (default 20)")
+    anim.add_argument("--duration", type=float, default=None, metavar="S",
+                      help="length of the movie in seconds (default: from the periods)")
+    anim.add_argument("--no-poinsot", action="store_true",
+                      help="leave out the panel of Poinsot's construction")
+    anim.add_argument("--dpi", type=float, default=80.0, metavar="N",
+                      help="pixels per inch of the 12 x 4.5 in frame (default 80)")
+    anim.add_argument("--body", type=int, default=None, metavar="I",
+                      help="the body of an ensemble file (default 0)")
+    anim.add_argument("--quiet", action="store_true", help="print nothing on success")
+    vw = sub.add_parser("view", help="an interactive 3D view of an ephemeris (one HTML "
+                        "file)", description=_VIEW_HELP,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    vw.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
+    vw.add_argument("-o", "--output", required=True, metavar="OUT.html",
+                    help="the page (.html)")
+    vw.add_argument("--frames", type=int, default=150, metavar="N",
+                    help="steps of the time slider (default 150)")
+    vw.add_argument("--body", type=int, default=None, metavar="I",
+                    help="the body shown of an ensemble file (default 0)")
+    vw.add_argument("--quiet", action="store_true", help="print nothing on success")
     return parser
 
 

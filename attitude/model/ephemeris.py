@@ -40,6 +40,7 @@ from scipy.spatial.transform import Rotation
 
 from ..foundations import quaternion as quat
 from ..foundations.errors import EphemerisFormatError, WriterError
+from ..foundations.lazy import wing_method
 from ..version import __version__
 from .body import RigidBody
 from .spice_ck import sample_ck
@@ -352,6 +353,49 @@ class Ephemeris:
         dL, dE = relative_drifts(self._dataset)
         return {"angular_momentum_rel_drift": float(dL.max()),
                 "energy_rel_drift": float(dE.max())}
+
+    # --- pictures (attitude.pictures, imported on the first call) -----------------------
+    def animate(self, path: str | PathLike, *, poinsot: bool = True, **options) -> Path:
+        """Write a movie of the rotation: the body turning, Poinsot's construction in
+        step with it (``poinsot=True``) and the rates and nutation against time.
+
+        ``path`` ends in ``.mp4`` (ffmpeg from the imageio-ffmpeg wheel) or ``.gif``
+        (Pillow); ``options`` are those of :func:`attitude.pictures.animate` (``fps``,
+        ``duration``, ``span``, ``shape``, ``body_index``, ``dpi``, ``progress``).  Needs
+        ``pip install 'attitude-dynamics[pictures]'``; see docs/pictures.md.
+
+        Examples
+        --------
+        >>> import pathlib, tempfile, numpy as np, attitude as att
+        >>> from scipy.spatial.transform import Rotation
+        >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+        >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+        >>> eph = att.propagate(body, state, np.linspace(0.0, 300.0, 31))
+        >>> eph.animate(pathlib.Path(tempfile.mkdtemp()) / "spin.gif", fps=2, duration=1,
+        ...             dpi=20).suffix
+        '.gif'
+        """
+        return wing_method("Ephemeris.animate")(self, path, poinsot=poinsot, **options)
+
+    def view(self, path: str | PathLike | None = None, **options):
+        """An interactive 3D view of the ephemeris: one self-contained HTML file (plotly,
+        no network), written to ``path`` when given; the returned object shows inline in
+        Jupyter (``_repr_html_``), so ``eph.view()`` as a cell's last line displays it.
+        ``options`` are those of :func:`attitude.pictures.view` (``max_frames``,
+        ``body_index``, ``shape``, ``geometry``, ``lightcurve``); see docs/pictures.md.
+
+        Examples
+        --------
+        >>> import numpy as np, attitude as att
+        >>> from scipy.spatial.transform import Rotation
+        >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+        >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
+        >>> eph = att.propagate(body, state, np.linspace(0.0, 300.0, 31))
+        >>> v = eph.view(max_frames=3)
+        >>> "<iframe" in v._repr_html_()
+        True
+        """
+        return wing_method("Ephemeris.view")(self, path, **options)
 
     def __len__(self) -> int:
         return self._dataset.sizes["time"]
