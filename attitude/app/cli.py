@@ -205,8 +205,8 @@ volume), STEM_state.toml (a scenario that `attitude run` propagates) and
 STEM_lightcurves.csv (data and model); prints the pole, its mirror, the period and the
 fit. The [expect] keys period, pole, rms and dark_facet are checked.
 
-  attitude invert scenarios/ariadne_inversion.toml
-  attitude run scenarios/ariadne_inversion_state.toml
+  attitude invert scenarios/inversion/ariadne.toml
+  attitude run scenarios/inversion/ariadne_state.toml
 
 Exit codes: 0 success, 1 an expectation failed, 2 bad input.
 """

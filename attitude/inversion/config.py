@@ -29,6 +29,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+import astropy.units as u
 import numpy as np
 
 from attitude.foundations.errors import AttitudeError, ScenarioError
@@ -210,7 +211,7 @@ def _checks(expect: dict, result: InversionResult) -> list[dict]:
     checks = []
     if "period" in expect:
         e = Expectation.from_table("period", expect["period"], default_unit="s")
-        checks.append(e.check(result.period))
+        checks.append(e.check(result.period / u.Unit(e.unit).to(u.s)))
     if "pole" in expect:
         want = expect["pole"]
         angle = min(_angle(result.pole, (want["longitude"], want["latitude"])),
