@@ -57,8 +57,8 @@ EXIT_BROKEN_PIPE = 128 + 13
 #: Command name -> the module that runs it (its ``command(args) -> int``), imported when
 #: the command runs (never for ``--help``).
 COMMANDS = {name: f"attitude.app.commands.{name}" for name in (
-    "run", "check", "classify", "convert", "section", "fit", "lightcurve", "animate",
-    "view")}
+    "run", "check", "classify", "convert", "section", "fit", "lightcurve", "invert",
+    "animate", "view")}
 
 _RUN_HELP = """\
 Propagate the scenario, print a summary and write its outputs.
@@ -219,6 +219,21 @@ Exit codes: 0 success, 1 an expectation failed, 2 bad input, 3 the propagation f
 """
 
 
+_INVERT_HELP = """\
+Find a body's convex shape, spin pole and sidereal period from its lightcurves alone
+(convex inversion, Kaasalainen & Torppa 2001). The scenario file has an [inversion]
+table: the lightcurve file with its geometry (DAMIT / convexinv format), the period or a
+[min, max] range to scan, the number of pole starts. Writes STEM_shape.obj (unit
+volume), STEM_state.toml (a scenario that `attitude run` propagates) and
+STEM_lightcurves.csv (data and model); prints the pole, its mirror, the period and the
+fit. The [expect] keys period, pole, rms and dark_facet are checked.
+
+  attitude invert scenarios/inversion/ariadne.toml
+  attitude run scenarios/inversion/ariadne_state.toml
+
+Exit codes: 0 success, 1 an expectation failed, 2 bad input.
+"""
+
 _ANIMATE_HELP = """\
 Write a movie of an ephemeris: the body turning (its equivalent inertia ellipsoid, or the
 OBJ named by the attribute shape_model) with its axes, L and omega; Poinsot's
@@ -369,6 +384,16 @@ def build_parser() -> argparse.ArgumentParser:
     lcp.add_argument("--quiet", action="store_true", help="print nothing on success")
     lcp.add_argument("--plot", action="store_true", help="write the lightcurve, periodogram, "
                      "folded and frequency-map figures as PNG (needs matplotlib)")
+    # --- inversion (issue 27) ---
+    invp = sub.add_parser("invert", help="shape, pole and period from lightcurves alone",
+                          description=_INVERT_HELP,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+    invp.add_argument("scenario", metavar="SCENARIO.toml", help="scenario with [inversion]")
+    invp.add_argument("-o", "--output", metavar="STEM",
+                      help="stem of the outputs (default [inversion].output or the "
+                           "scenario's stem)")
+    invp.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
+    invp.add_argument("--quiet", action="store_true", help="print nothing on success")
     # --- pictures (issue 29) ---
     anim = sub.add_parser("animate", help="a movie of an ephemeris (MP4 or GIF)",
                           description=_ANIMATE_HELP,

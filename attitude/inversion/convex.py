@@ -441,7 +441,7 @@ def fit_convex(model: ConvexModel, longitude, latitude, period, *, coefficients=
 
     result = least_squares(residuals, x0, jac=jacobian, method="lm", x_scale="jac",
                            ftol=tolerance, xtol=1e-12, gtol=1e-12,
-                           max_nfev=max_iterations * (x0.size + 1))
+                           max_nfev=max_iterations)
     c, lon, lat, p, ph = unpack(result.x)
     raw, _, areas, _, closing = evaluate(result.x)[:5]
     resid = (data_rel - compared(raw)) * weight

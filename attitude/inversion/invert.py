@@ -296,8 +296,8 @@ def _pole_distance(a: ConvexFit, b: ConvexFit) -> float:
 
 
 def _example_observations():
-    """Relative lightcurves of an elongated convex model (pole 0.5, 1.0 rad, P 2 h) from
-    three nights, for the examples."""
+    """Relative lightcurves of a convex model (``z`` its shortest axis, ``x`` its longest;
+    pole 0.5, 1.0 rad, P 2 h) from three nights, for the examples."""
 
 
     image = GaussianImage(rows=4, degree=2)
@@ -307,7 +307,7 @@ def _example_observations():
                               Geometry(sun=[1, 0.3 * k, 0.1], observer=[1, 0.3 * k - 0.2, 0]))
            for k in range(3)]
     truth = np.zeros(9)
-    truth[8] = 0.4
+    truth[6], truth[8] = 0.3, 0.4        # flattened along z, elongated along x
     model = ConvexModel(obs, image)
     y = model.brightness(truth, 0.5, 1.0, 7200.0)
     return [ObservedLightcurve(o.epoch, o.time, y[model.block == k], o.geometry)

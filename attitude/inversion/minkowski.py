@@ -166,14 +166,29 @@ def facet_mesh(normals, support, *, merge: float = 1e-9) -> tuple[np.ndarray, np
 
 
 def _volume_and_areas(normals, h):
-    """``V(h)`` and the facet areas ``F_j(h)`` (zero for a facet that has vanished)."""
-    vertices, faces, facet_of = support_polyhedron(normals, h)
-    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    cross = np.cross(b - a, c - a)
-    volume = np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0
-    areas = np.bincount(facet_of, 0.5 * np.linalg.norm(cross, axis=1),
-                        minlength=normals.shape[0])
-    return volume, areas
+    """``V(h)`` and the facet areas ``F_j(h)`` (zero for a facet that has vanished), from
+    one convex hull: that of the dual points ``n_j / h_j``.  A dual triangle is a corner
+    ``p`` of ``P(h)`` (its plane is ``p . x = 1``), a dual edge ``a -> b`` between
+    triangles ``t, t'`` an edge ``p_t p_t'`` of facet ``a``; so
+    ``F_a = |n_a . sum (p_t x p_t')| / 2`` over the edges leaving ``a``, and
+    ``V = sum_a h_a F_a / 3``."""
+    hull = ConvexHull(normals / h[:, None])
+    simplices = hull.simplices.copy()
+    corner = -hull.equations[:, :3] / hull.equations[:, 3:]
+    pts = hull.points
+    a, b, c = pts[simplices[:, 0]], pts[simplices[:, 1]], pts[simplices[:, 2]]
+    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), corner) < 0.0
+    simplices[flip] = simplices[flip][:, ::-1]
+    neighbours = hull.neighbors.copy()
+    neighbours[flip] = neighbours[flip][:, ::-1]
+    area = np.zeros((normals.shape[0], 3))
+    for k in range(3):
+        # edge from vertex k+1 to k+2, shared with the triangle opposite vertex k
+        start = simplices[:, (k + 1) % 3]
+        other = neighbours[:, k]
+        np.add.at(area, start, np.cross(corner, corner[other]))
+    areas = 0.5 * np.abs(np.einsum("ij,ij->i", area, normals))
+    return float(h @ areas) / 3.0, areas
 
 
 def polyhedron_from_areas(normals, areas, *, volume: float = 1.0, tolerance: float = 1e-10,

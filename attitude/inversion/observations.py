@@ -148,11 +148,11 @@ def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",
         (the Julian date light-time corrected, the brightness in intensity units, the
         asteroid-centric ecliptic J2000 vectors toward the Sun and the Earth, au).
     time_scale : str
-        Time scale of the Julian dates (DAMIT's are UTC; the times are converted to
-        seconds since ``epoch`` in that scale's clock).
+        Time scale of the Julian dates (DAMIT's are UTC); the times are seconds of TDB
+        since ``epoch`` (leap seconds counted).
     epoch : Time, optional
         Reference epoch of every lightcurve's ``time`` (default: the first point of the
-        file), so that all lightcurves share one clock.
+        file), so that all lightcurves share one clock; kept in TDB.
 
     Returns
     -------
@@ -193,15 +193,14 @@ def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",
     blocks = _blocks(lines, path)
     if not blocks:
         raise LightcurveFormatError("holds no lightcurve", path=path)
-    jd0 = blocks[0][2][0, 0]
     if epoch is None:
-        epoch = Time(jd0, format="jd", scale=time_scale)
-    ref = Time(epoch, scale=time_scale)
+        epoch = Time(blocks[0][2][0, 0], format="jd", scale=time_scale)
+    ref = Time(epoch).tdb
     observations = []
     for k, (line_no, calibrated, rows) in enumerate(blocks):
-        # seconds since the epoch in the file's scale: split JD to keep precision
-        days = (rows[:, 0] - ref.jd1) - ref.jd2
-        time = days * 86400.0
+        # seconds of TDB since the epoch (leap seconds counted), the JD split in two
+        when = Time(rows[:, 0], format="jd", scale=time_scale).tdb
+        time = ((when.jd1 - ref.jd1) + (when.jd2 - ref.jd2)) * 86400.0
         sun, earth = rows[:, 2:5] * AU, rows[:, 5:8] * AU
         name = f"{path.name}: lightcurve {k + 1} (line {line_no})"
         try:

@@ -502,6 +502,34 @@ class Polyhedron:
         """
         return self._inertia_per_density.copy()
 
+    def obj_text(self, *, comment: str = "") -> str:
+        """The shape as the text of a Wavefront OBJ file (vertices in metres, 1-based
+        triangles counter-clockwise seen from outside): what :meth:`from_obj` reads back.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from attitude.model.shape import Polyhedron
+        >>> tetra = Polyhedron([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        ...                    [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        >>> print(tetra.obj_text(comment="a tetrahedron"))
+        # a tetrahedron
+        v 0 0 0
+        v 1 0 0
+        v 0 1 0
+        v 0 0 1
+        f 1 3 2
+        f 1 2 4
+        f 1 4 3
+        f 2 3 4
+        <BLANKLINE>
+        """
+        lines = [f"# {line}" for line in comment.splitlines()]
+        lines += ["v " + " ".join(_obj_number(c) for c in vertex)
+                  for vertex in self.vertices.tolist()]
+        lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in self.faces.tolist()]
+        return "\n".join(lines) + "\n"
+
     def mass_properties(self, density: float | str | u.Quantity) -> tuple:
         """Mass, centre of mass and inertia of the homogeneous solid.
 
@@ -847,3 +875,9 @@ def _parse_obj(data: bytes) -> tuple[np.ndarray, np.ndarray]:
     j = np.flatnonzero((local >= 1) & (local <= n_corners[polygon] - 2))
     faces = np.column_stack([index[start[polygon[j]]], index[j], index[j + 1]])
     return vertices, faces
+
+
+def _obj_number(x: float) -> str:
+    """A coordinate for an OBJ file: the shortest text that reads back to the same float."""
+    text = repr(float(x))
+    return text[:-2] if text.endswith(".0") else text

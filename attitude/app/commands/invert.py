@@ -1,0 +1,51 @@
+"""``attitude invert``: shape, pole and period from lightcurves alone (issue 27)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ...inversion.config import load_inversion, run_inversion
+from ...model.ephemeris import write_atomically
+from .common import EXIT_EXPECTATION, EXIT_OK
+
+#: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
+#: is the interface, tested in tests/app/test_invert_command.py).
+__all__ = []
+
+
+def command(args) -> int:
+    """``attitude invert``."""
+    scenario = load_inversion(args.scenario)
+    run = run_inversion(scenario, output=args.output)
+    res = run.result
+    if args.report:
+        report = {"scenario": run.name, "regime": res.regime, "period": res.period,
+                  "pole": list(res.pole), "rms": res.rms, "chi2": res.chi2,
+                  "dark_facet": res.dark_facet, "spin_axis_tilt_deg": res.spin_axis_tilt,
+                  "alternatives": [{"chi2": c, "solution": s} for c, s in res.alternatives],
+                  "expect": run.expect, "outputs": [str(p) for p in run.outputs]}
+        text = json.dumps(report, indent=2, default=float)
+        write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(text + "\n"))
+    if not args.quiet:
+        lon, lat = res.pole
+        print(f"{run.name}: pole ({lon:.2f}, {lat:.2f}) deg (ecliptic J2000), sidereal period "
+              f"{res.period / 3600:.9g} h, rms {res.rms:.4g}, dark facet "
+              f"{100 * res.dark_facet:.2f} %")
+        print(f"  spin axis {res.spin_axis_tilt:.2f} deg from the shape's axis of largest "
+              "inertia (uniform density)")
+        for chi2, text in res.alternatives:
+            print(f"  alternative: {text}, chi2 {chi2:.6g} (best {res.chi2:.6g})")
+        for e in run.expect:
+            unit = f" {e['unit']}" if e.get("unit") else ""
+            print(f"  expect {e['key']}: expected {e['expected']}{unit}, got "
+                  f"{_fmt(e['got'])}{unit}: {'pass' if e['ok'] else 'FAIL'}")
+        for path in run.outputs:
+            print(f"  wrote {path}")
+    return EXIT_OK if run.ok else EXIT_EXPECTATION
+
+
+def _fmt(value) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
+    return f"{value:.9g}" if isinstance(value, float) else str(value)

@@ -1,0 +1,291 @@
+"""The inversion scenario file: ``[inversion]``, its outputs and its ``[expect]`` keys.
+
+An inversion starts from lightcurves, not from a body and a state, so its scenario file
+holds a ``[scenario]`` table, an ``[inversion]`` table and optionally ``[expect]``::
+
+    [scenario]
+    name = "(43) Ariadne from its lightcurves"
+
+    [inversion]
+    lightcurves = "data/ariadne_lcs_rel.txt"   # DAMIT / convexinv format, relative to this file
+    period = "5.76198 h"                       # or a range to scan: ["5.7 h", "5.8 h"]
+    poles = 10
+
+    [expect]
+    period = { value = 5.761982, unit = "h", rel_tol = 2e-6 }
+    pole = { longitude = 253.3, latitude = -16.9, tolerance = 2.0 }   # deg, or the mirror
+    rms = { max = 0.02 }
+
+:func:`run_inversion` runs it and writes, next to the output stem, the shape
+(``STEM_shape.obj``, unit volume), a scenario file of the rotation state that
+``attitude run`` propagates (``STEM_state.toml``) and the data with the model
+(``STEM_lightcurves.csv``).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import astropy.units as u
+import numpy as np
+
+from attitude.foundations.errors import AttitudeError, ScenarioError
+from attitude.foundations.expectation import Expectation
+from attitude.foundations.spec import Key, Table, validate
+from attitude.inversion.invert import InversionResult, invert
+from attitude.inversion.observations import read_damit_lightcurves
+from attitude.model.ephemeris import AtomicFiles
+from attitude.model.state import format_epoch
+
+__all__ = ["INVERSION", "InversionRun", "load_inversion", "run_inversion", "is_inversion"]
+
+#: The ``[inversion]`` table.
+INVERSION = Table("inversion", (
+    Key("lightcurves", "string", required=True,
+        doc="lightcurve file with its geometry (DAMIT / convexinv format), relative to "
+            "the scenario file"),
+    Key("format", "string", default="damit", choices=("damit",), doc="file format"),
+    Key("time_scale", "string", default="utc", choices=("utc", "tt", "tdb"),
+        doc="time scale of the file's Julian dates"),
+    Key("rotation", "string", default="auto", choices=("auto", "principal"),
+        doc="the rotation fitted (the tumbling inversion is coming)"),
+    Key("period", "quantity", unit="s", shape=((), (2,)), positive=True, required=True,
+        doc="sidereal period, or [min, max] to scan"),
+    Key("poles", "integer", default=10, bounds=(1, None), doc="pole starts"),
+    Key("rows", "integer", default=8, bounds=(2, 30),
+        doc="rows per octant of the Gaussian image (8 rows^2 facets)"),
+    Key("degree", "integer", default=6, bounds=(0, 12),
+        doc="degree of the spherical-harmonic series of the log areas"),
+    Key("convexity", "number", default=0.1, nonnegative=True,
+        doc="weight of the convexity term"),
+    Key("max_iterations", "integer", default=100, bounds=(1, None),
+        doc="iterations of each fit"),
+    Key("output", "string", doc="stem of the outputs, relative to the scenario file "
+                                "(default: the scenario file's stem)"),
+))
+
+#: The ``[scenario]`` table of an inversion file.
+SCENARIO = Table("scenario", (
+    Key("name", "string", required=True),
+    Key("description", "string"),
+))
+
+#: ``[expect]``: the period, the pole (or its mirror) and upper bounds.
+POLE = Table("pole", (
+    Key("longitude", "number", required=True, bounds=(-360.0, 360.0), doc="deg, ecliptic"),
+    Key("latitude", "number", required=True, bounds=(-90.0, 90.0), doc="deg, ecliptic"),
+    Key("tolerance", "number", required=True, positive=True,
+        doc="deg: the angle from this pole or its mirror (longitude + 180 deg)"),
+))
+EXPECT = Table("expect", (
+    Key("period", "table", table=Expectation.table("period", unit="s", default_unit="s")),
+    Key("pole", "table", table=POLE),
+    Key("rms", "table", table=Table("rms", (Key("max", "number", required=True,
+                                                   nonnegative=True),))),
+    Key("dark_facet", "table", table=Table("dark_facet", (
+        Key("max", "number", required=True, nonnegative=True),))),
+))
+
+
+def is_inversion(document: dict) -> bool:
+    """Whether a parsed scenario file is an inversion (it has an ``[inversion]`` table).
+
+    Examples
+    --------
+    >>> is_inversion({"scenario": {}, "inversion": {}}), is_inversion({"body": {}})
+    (True, False)
+    """
+    return isinstance(document.get("inversion"), dict)
+
+
+@dataclass(frozen=True)
+class InversionScenario:
+    """An inversion scenario file, validated (SI values)."""
+
+    path: Path
+    name: str
+    inversion: dict
+    expect: dict
+
+
+def load_inversion(path) -> InversionScenario:
+    """Read and validate an inversion scenario file.
+
+    Raises
+    ------
+    ScenarioError
+        On a file that cannot be read or parsed, or a key that is missing, unknown or
+        of the wrong type (the message names the file and the key).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "inv.toml"
+    >>> _ = path.write_text('[scenario]\\nname = "x"\\n[inversion]\\nlightcurves = "lcs"\\n'
+    ...                     'period = "6 h"\\n')
+    >>> scenario = load_inversion(path)
+    >>> scenario.inversion["period"], scenario.inversion["poles"]
+    (21600.0, 10)
+    """
+    path = Path(path)
+    try:
+        document = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as err:
+        raise ScenarioError(f"cannot read the file: {getattr(err, 'strerror', None) or err}",
+                            path=path) from None
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError(f"not valid TOML: {err}", path=path) from None
+    unknown = sorted(set(document) - {"scenario", "inversion", "expect"})
+    if unknown:
+        raise ScenarioError(f"unknown table(s) {', '.join(unknown)} in an inversion "
+                            "scenario (it has [scenario], [inversion] and [expect])",
+                            path=path)
+    for name in ("scenario", "inversion"):
+        if not isinstance(document.get(name), dict):
+            raise ScenarioError(f"the [{name}] table is missing", path=path, key=name)
+    scenario = validate(document["scenario"], SCENARIO, where="scenario", path=path,
+                        error=ScenarioError)
+    inversion = validate(document["inversion"], INVERSION, where="inversion", path=path,
+                         error=ScenarioError)
+    inversion = {key.name: key.default for key in INVERSION.keys
+                 if key.default is not None} | inversion
+    expect = document.get("expect", {})
+    if not isinstance(expect, dict):
+        raise ScenarioError("must be a table", path=path, key="expect")
+    expect = validate(expect, EXPECT, where="expect", path=path, error=ScenarioError)
+    return InversionScenario(path, scenario["name"], inversion, expect)
+
+
+@dataclass(frozen=True, eq=False)
+class InversionRun:
+    """The outcome of :func:`run_inversion`: the result, the ``[expect]`` checks (the
+    dicts of the ``--report``) and the files written."""
+
+    name: str
+    result: InversionResult
+    expect: list
+    outputs: list
+
+    @property
+    def ok(self) -> bool:
+        """Every expectation met."""
+        return all(check["ok"] for check in self.expect)
+
+
+def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bool = True
+                  ) -> InversionRun:
+    """Invert the scenario's lightcurves, check ``[expect]``, write the outputs.
+
+    Parameters
+    ----------
+    scenario : InversionScenario
+        From :func:`load_inversion`.
+    output : path, optional
+        Stem of the outputs (default: ``[inversion] output``, else the scenario's stem).
+    write_outputs : bool
+        False for a check that writes nothing.
+    """
+    cfg = scenario.inversion
+    data = (scenario.path.parent / cfg["lightcurves"])
+    try:
+        observations = read_damit_lightcurves(data, time_scale=cfg["time_scale"])
+    except AttitudeError as err:
+        raise ScenarioError(err.reason, path=err.path or data,
+                            key=err.key or "inversion.lightcurves") from None
+    result = invert(observations, cfg["rotation"], period=cfg["period"],
+                    poles=cfg["poles"], rows=cfg["rows"], degree=cfg["degree"],
+                    convexity=cfg["convexity"], max_iterations=cfg["max_iterations"])
+    checks = _checks(scenario.expect, result)
+    outputs = []
+    if write_outputs:
+        stem = Path(output) if output is not None else scenario.path.parent / cfg.get(
+            "output", scenario.path.stem)
+        outputs = _write(stem, scenario, result, observations)
+    return InversionRun(scenario.name, result, checks, outputs)
+
+
+def _checks(expect: dict, result: InversionResult) -> list[dict]:
+    checks = []
+    if "period" in expect:
+        e = Expectation.from_table("period", expect["period"], default_unit="s")
+        checks.append(e.check(result.period / u.Unit(e.unit).to(u.s)))
+    if "pole" in expect:
+        want = expect["pole"]
+        angle = min(_angle(result.pole, (want["longitude"], want["latitude"])),
+                    _angle(result.pole, (want["longitude"] + 180.0, want["latitude"])))
+        checks.append({"key": "pole", "expected": [want["longitude"], want["latitude"]],
+                       "got": list(result.pole), "unit": "deg",
+                       "tolerance": want["tolerance"], "angle": angle,
+                       "ok": angle <= want["tolerance"]})
+    for key, got in (("rms", result.rms), ("dark_facet", result.dark_facet)):
+        if key in expect:
+            bound = expect[key]["max"]
+            checks.append({"key": key, "expected": {"max": bound}, "got": got,
+                           "ok": got <= bound})
+    return checks
+
+
+def _angle(a, b) -> float:
+    """Angle between two (longitude, latitude) directions, deg."""
+    (l1, b1), (l2, b2) = np.radians(a), np.radians(b)
+    c = math.sin(b1) * math.sin(b2) + math.cos(b1) * math.cos(b2) * math.cos(l1 - l2)
+    return math.degrees(math.acos(min(1.0, max(-1.0, c))))
+
+
+def _write(stem: Path, scenario, result: InversionResult, observations) -> list[Path]:
+    shape_path = Path(f"{stem}_shape.obj")
+    state_path = Path(f"{stem}_state.toml")
+    curves_path = Path(f"{stem}_lightcurves.csv")
+    state, lon, lat = result.state, *result.pole
+    comment = (f"convex shape inverted by attitude from {scenario.path.name}: pole "
+               f"({lon:.2f}, {lat:.2f}) deg ecliptic J2000, P = {result.period:.9g} s, "
+               f"rms {result.rms:.4g}; unit volume (relative photometry carries no size)")
+    state_text = "\n".join([
+        f"# The rotation state inverted by `attitude invert {scenario.path.name}`:",
+        f"# pole ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, sidereal period "
+        f"{result.period / 3600.0:.9g} h, rms {result.rms:.4g}, dark facet "
+        f"{100 * result.dark_facet:.2f} %; spin axis {result.spin_axis_tilt:.2f} deg from "
+        "the axis of largest inertia at uniform density.",
+        *(f"# alternative: {text}, chi2 {chi2:.6g} (best {result.chi2:.6g})"
+          for chi2, text in result.alternatives),
+        "# The shape is the convex model at unit volume and an arbitrary uniform density:",
+        "# the moment ratios are what the photometry determines.",
+        "",
+        "[scenario]",
+        f'name = "{scenario.name} (inverted)"',
+        "",
+        "[body]",
+        f'shape = "{shape_path.name}"',
+        'density = "1 kg/m3"',
+        "",
+        "[state]",
+        f'epoch = "{format_epoch(state.epoch)}"',
+        f'time_scale = "{state.epoch.scale}"',
+        f'frame = "{state.frame}"',
+        "attitude = { quaternion_scalar_last = ["
+        + ", ".join(repr(float(x)) for x in state.attitude.as_quat()) + "] }",
+        "omega_body = { value = [" + ", ".join(repr(float(x)) for x in state.omega_body)
+        + '], unit = "rad/s" }',
+        "",
+        "[propagation]",
+        f'duration = "{10 * result.period:.9g} s"',
+        f'step = "{result.period / 100:.9g} s"',
+        "",
+    ])
+    rows = ["lightcurve,jd,data,model"]   # relative lightcurves: each over its mean
+    start = 0
+    for k, obs in enumerate(observations):
+        y = obs.brightness if obs.calibrated else obs.brightness / obs.brightness.mean()
+        model = result.fit.model[start:start + len(obs)]
+        start += len(obs)
+        rows += [f"{k + 1},{t:.8f},{d:.8g},{m:.8g}"
+                 for t, d, m in zip(obs.times.jd, y, model)]
+    with AtomicFiles(shape_path, state_path, curves_path) as files:
+        files[shape_path].write_text(result.shape.obj_text(comment=comment))
+        files[state_path].write_text(state_text)
+        files[curves_path].write_text("\n".join(rows) + "\n")
+    return [shape_path, state_path, curves_path]
+
