@@ -37,6 +37,7 @@ from ..foundations.errors import (
 from ..foundations.expectation import Expectation
 from ..foundations.quantities import read_unit
 from ..foundations.spec import Key, Table, json_schema, markdown, validate
+from ..inversion.config import is_inversion
 from ..model.body import MassProperties, RigidBody
 from ..model.ephemeris import Ephemeris, relative_drifts
 from ..model.freebody import diagnose
@@ -202,7 +203,11 @@ def load_scenario(path: str | Path) -> Scenario:
     """
     path = Path(path)
     r = _Reader(path)
-    doc = validate(read_scenario_toml(path), SCENARIO, path=str(path), error=ScenarioError)
+    raw = read_scenario_toml(path)
+    if is_inversion(raw):
+        raise ScenarioError("an inversion scenario ([inversion]: lightcurves in, shape and "
+                            f"pole out): run it with `attitude invert {path}`", path=path)
+    doc = validate(raw, SCENARIO, path=str(path), error=ScenarioError)
     meta = doc.get("scenario", {})
     name = meta.get("name", path.stem)
     description = meta.get("description", "")

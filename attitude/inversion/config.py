@@ -138,6 +138,10 @@ def load_inversion(path) -> InversionScenario:
                             path=path) from None
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"not valid TOML: {err}", path=path) from None
+    if not is_inversion(document):
+        raise ScenarioError("has no [inversion] table: `attitude invert` takes lightcurves "
+                            "and their geometry (docs/inversion.md); propagate a body and a "
+                            f"state with `attitude run {path}`", path=path)
     unknown = sorted(set(document) - {"scenario", "inversion", "expect"})
     if unknown:
         raise ScenarioError(f"unknown table(s) {', '.join(unknown)} in an inversion "
@@ -216,15 +220,14 @@ def _checks(expect: dict, result: InversionResult) -> list[dict]:
         want = expect["pole"]
         angle = min(_angle(result.pole, (want["longitude"], want["latitude"])),
                     _angle(result.pole, (want["longitude"] + 180.0, want["latitude"])))
-        checks.append({"key": "pole", "expected": [want["longitude"], want["latitude"]],
-                       "got": list(result.pole), "unit": "deg",
-                       "tolerance": want["tolerance"], "angle": angle,
-                       "ok": angle <= want["tolerance"]})
-    for key, got in (("rms", result.rms), ("dark_facet", result.dark_facet)):
+        # the angle from the expected pole or its mirror (longitude + 180 deg), deg
+        e = Expectation("pole", want["tolerance"], "deg", upper_bound=True,
+                        reported=(("pole", [want["longitude"], want["latitude"]]),))
+        checks.append(e.check(angle))
+    for key in ("rms", "dark_facet"):
         if key in expect:
-            bound = expect[key]["max"]
-            checks.append({"key": key, "expected": {"max": bound}, "got": got,
-                           "ok": got <= bound})
+            got = result.rms if key == "rms" else result.dark_facet
+            checks.append(Expectation.at_most(key, expect[key]["max"]).check(got))
     return checks
 
 

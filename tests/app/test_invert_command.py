@@ -82,3 +82,16 @@ def test_bad_inversion_scenarios_exit_2_with_one_line(scenario, capsys, edit, ke
     assert main(["invert", str(scenario)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and key in err[0] and "Traceback" not in err[0]
+
+
+def test_check_runs_inversion_scenarios(scenario, capsys):
+    assert main(["check", str(scenario)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("pass  ") == 3 and "pole" in out
+
+
+def test_each_command_points_to_the_other_for_the_wrong_kind_of_scenario(scenario, capsys):
+    assert main(["run", str(scenario)]) == 2
+    assert "attitude invert" in capsys.readouterr().err
+    assert main(["invert", "scenarios/dzhanibekov.toml"]) == 2
+    assert "attitude run" in capsys.readouterr().err

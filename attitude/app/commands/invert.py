@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ...inversion.config import load_inversion, run_inversion
 from ...model.ephemeris import write_atomically
-from .common import EXIT_EXPECTATION, EXIT_OK
+from .common import EXIT_EXPECTATION, EXIT_OK, expectation_line
 
 #: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
 #: is the interface, tested in tests/app/test_invert_command.py).
@@ -37,15 +37,8 @@ def command(args) -> int:
         for chi2, text in res.alternatives:
             print(f"  alternative: {text}, chi2 {chi2:.6g} (best {res.chi2:.6g})")
         for e in run.expect:
-            unit = f" {e['unit']}" if e.get("unit") else ""
-            print(f"  expect {e['key']}: expected {e['expected']}{unit}, got "
-                  f"{_fmt(e['got'])}{unit}: {'pass' if e['ok'] else 'FAIL'}")
+            print(f"  {expectation_line(e)}")
         for path in run.outputs:
             print(f"  wrote {path}")
     return EXIT_OK if run.ok else EXIT_EXPECTATION
 
-
-def _fmt(value) -> str:
-    if isinstance(value, list):
-        return "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
-    return f"{value:.9g}" if isinstance(value, float) else str(value)
