@@ -154,7 +154,10 @@ class InversionResult:
         Sidereal period, s.
     pole : tuple
         ``(longitude, latitude)`` of the spin axis, deg, ecliptic J2000.
-    chi2, rms : float
+    chi2 : float
+        Sum of the squared residuals of the data (without the convexity term).
+    rms : float
+        ``sqrt(chi2 / n)``: relative flux for relative lightcurves.
     regime : str
         ``"PA-short"`` (a principal-axis rotator is what was fitted).
     alternatives : list of (chi2, description)
