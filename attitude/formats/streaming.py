@@ -341,7 +341,7 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
         raise InvalidStateError(f"expected an AttitudeState for one RigidBody, got "
                                 f"{type(state).__name__}", key="state")
     torques = list(torques or [])
-    method = _stream_method(method, torques)
+    given, method = method, _stream_method(method, torques)
     n_bodies = len(bodies) if batch else 1
     if block is None:
         block = max(1, _BLOCK_SAMPLES // n_bodies)
@@ -351,7 +351,7 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
     if block < 1:
         raise InvalidStateError(f"block must be >= 1 epoch, got {block}", key="block")
     if method == "exact":
-        blocks = _exact_blocks(bodies, states, times, block)
+        blocks = _exact_blocks(bodies, states, times, block, given)
     else:
         blocks = _splitting_blocks(bodies, states, times, block, torques, step,
                                    4 if order is None else order)
@@ -363,7 +363,9 @@ def propagate_to_netcdf(body, state, times, path: str | PathLike, *,
                 writer = EphemerisWriter(
                     path, body=bodies, epoch=first.epoch, frame=first.frame,
                     title=title if title is not None else attrs["title"],
-                    source=source if source is not None else attrs["source"], chunk=chunk)
+                    source=source if source is not None else attrs["source"], chunk=chunk,
+                    extra_attrs={k: attrs[k] for k in ("method", "method_reason")
+                                 if k in attrs})
                 writer.open()
             writer.append(eph)
             eph = None              # free the block before the next one is computed
@@ -388,10 +390,11 @@ def _stream_method(method, torques) -> str:
     return method
 
 
-def _exact_blocks(bodies, states, times, block: int):
-    """An Ephemeris per block: :func:`attitude.propagate` with the closed form."""
+def _exact_blocks(bodies, states, times, block: int, given=None):
+    """An Ephemeris per block: :func:`attitude.propagate` with the closed form (``given``:
+    the method the caller named, ``"exact"`` or None, so that the file says why)."""
     for i0 in range(0, max(len(times), 1), block):
-        yield propagate(bodies, states, times[i0:i0 + block], method="exact")
+        yield propagate(bodies, states, times[i0:i0 + block], method=given)
 
 
 def _splitting_blocks(bodies, states, times, block: int, torques, step, order):
