@@ -306,4 +306,6 @@ def activity(label: str, *, show: bool | None = None):
     ...     pass
     """
     with Progress(None, label, show=show, amount=lambda x: "") as bar, bar.ticking():
+        if DELAY <= 0.0:             # shown at once: now, not at the first tick
+            bar.update(0.0)
         yield bar

@@ -64,7 +64,7 @@ def test_lightcurve_command_writes_prints_and_checks(tmp_path, capsys):
     report = tmp_path / "report.json"
     assert main(["lightcurve", str(path), "--report", str(report), "--plot"]) == 0
     out = capsys.readouterr().out
-    assert "lightcurve period (double-peaked" in out and "pass" in out
+    assert "lightcurve period (double-peaked" in out and "ok   lightcurve_period" in out
     assert (tmp_path / "lc.nc").is_file()
     for name in ("lightcurve", "periodogram", "folded"):
         assert (tmp_path / f"lc_{name}.png").is_file()
