@@ -14,6 +14,7 @@ from scipy.spatial.transform import Rotation
 import attitude as att
 from attitude.fitting import PARAMETERS, free_parameters
 from attitude.fitting.leastsq import project
+from tests.fitting.fit_statistics import assert_status_is_consistent, chi2_bounds
 
 BODY = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
 TRUTH = att.AttitudeState("2029-04-13T00:00:00", Rotation.from_rotvec([0.4, -0.3, 0.8]),
@@ -55,7 +56,9 @@ def test_session_offsets_do_not_change_the_state_and_come_back():
     res = att.fit(att.LightcurveObservations(T, shifted, SIGMA, GEOM, SHAPE,
                                              sessions=NIGHT), BODY, _guess(),
                   multistart=False)
-    assert plain.success and res.success, (plain.message, res.message)
+    # both converged: the comparison below is of two optima (a fit out of evaluations,
+    # even at an acceptable chi2, would compare where the solver happened to stop)
+    assert plain.status == res.status == "converged", (plain.message, res.message)
     assert res.regime == plain.regime == "SAM"
     assert res.dof == plain.dof - 2 == T.size - 8 - 3        # three offsets, not one
     p_true, _ = free_parameters(BODY, TRUTH)
@@ -68,7 +71,8 @@ def test_session_offsets_do_not_change_the_state_and_come_back():
             < 3 * res.uncertainties[name], name
     # chi2 of the session fit: the plain fit's minimum plus what the two extra offsets
     # absorb (nothing here: the data were made with one zero point per night)
-    assert abs(res.chi2 - res.dof) < 5 * np.sqrt(2 * res.dof)
+    lo, hi = chi2_bounds(res.dof, 1)
+    assert lo < res.chi2 < hi, (res.chi2, res.dof)
     (lc,) = res.lightcurve_offsets()
     (lc0,) = plain.lightcurve_offsets()
     np.testing.assert_array_equal(lc["session"], [0, 1, 2])
@@ -91,7 +95,8 @@ def test_profiled_covariance_equals_the_joint_fit_marginal():
     shifted = _data(rng) + OFFSETS[NIGHT]
     obs = att.LightcurveObservations(T, shifted, SIGMA, GEOM, SHAPE, sessions=NIGHT)
     res = att.fit(obs, BODY, _guess(), multistart=False)
-    assert res.success
+    assert_status_is_consistent(res)
+    assert res.status in ("converged", "max_nfev at an acceptable chi2"), res.message
     objective = res.objective
     x = np.array([res.parameters[n] for n in res.free])
     h = np.maximum(np.finfo(float).eps ** (1 / 3) * np.abs(x), 1e-8)
