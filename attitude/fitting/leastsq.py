@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.special import gammaincinv
 
 from ..foundations.errors import AttitudeError
 from ..model.body import RigidBody
@@ -35,6 +36,11 @@ PENALTY = 1e4
 #: (sqrt(2 dof)) above its expectation (dof) is reported as unsuccessful: a local
 #: minimum or wrong uncertainties, not an answer.
 CHI2_SIGMAS = 10.0
+#: A fit that ran out of evaluations (``max_nfev``) at a chi^2 below this quantile of
+#: the chi^2 distribution of its degrees of freedom is reported as such (status
+#: ``"max_nfev at an acceptable chi2"``): statistically as good as the optimum, though
+#: the solver's tolerances were not met; above it, as not converged (``"max_nfev"``).
+ACCEPTABLE_CHI2_QUANTILE = 0.999
 _EPS = 1e-9
 
 
@@ -161,7 +167,15 @@ class FitResult:
     success, message : bool, str
         From the solver, for the best start; ``success`` is also False when the solver
         stopped at a chi^2 more than :data:`CHI2_SIGMAS` standard deviations above its
-        expectation (a local minimum: the message says so).
+        expectation (a local minimum: the message says so), and when it ran out of
+        evaluations (``max_nfev``), whatever the chi^2.
+    status : str
+        What the solver's stop means: ``"converged"``; ``"local minimum"`` (converged
+        at an improbable chi^2, above); ``"max_nfev at an acceptable chi2"`` (out of
+        evaluations at a chi^2 below the :data:`ACCEPTABLE_CHI2_QUANTILE` quantile of
+        its distribution: as good a fit as the data allow, not yet converged: raise
+        ``max_nfev``); ``"max_nfev"`` (out of evaluations at a higher chi^2);
+        ``"failed"`` (any other stop of the solver).
     body, state : RigidBody, AttitudeState
         The fitted body (moments in the guess body's axes) and state at the epoch.
     regime : str
@@ -195,8 +209,8 @@ class FitResult:
     >>> q = att.propagate(body, truth, t).dataset["quaternion"].values
     >>> res = att.fit([att.AttitudeObservations(t, q, "0.001 deg")], body, truth,
     ...               free=["phi0", "psi0"])
-    >>> res.success, res.regime, res.free, res.dof
-    (True, 'SAM', ('phi0', 'psi0'), 118)
+    >>> res.success, res.status, res.regime, res.free, res.dof
+    (True, 'converged', 'SAM', ('phi0', 'psi0'), 118)
     >>> bool(res.chi2 < 1e-6)                             # noiseless data
     True
     >>> res.uncertainties["energy_ratio"]                 # fixed: no uncertainty
@@ -205,6 +219,7 @@ class FitResult:
 
     success: bool
     message: str
+    status: str
     body: RigidBody
     state: AttitudeState
     regime: str
@@ -427,13 +442,44 @@ def _result(sol, objective: Objective, alternatives: tuple) -> FitResult:
     res = sol.fun[:-1]
     nuisance = sum(getattr(o, "n_nuisance", 0) for o in objective.observations)
     chi2, dof = float(res @ res), int(res.size - len(names) - nuisance)
-    success, message = bool(sol.success), str(sol.message)
-    if success and dof > 0 and chi2 > dof + CHI2_SIGMAS * np.sqrt(2.0 * dof):
-        success = False
-        message = (f"the solver stopped ({message}) at chi2 = {chi2:.6g} for {dof} degrees "
-                   f"of freedom, {(chi2 - dof) / np.sqrt(2.0 * dof):.0f} sigma above its "
-                   "expectation: a local minimum, or uncertainties that are too small; try "
-                   "other starts (starts=...) or check the sigmas")
-    return FitResult(success, message, body, state, regime, float(margin), parameters,
-                     uncertainties, covariance, names, res, chi2, dof, alternatives,
-                     objective)
+    status, message = stop_status(sol, chi2, dof)
+    return FitResult(status == "converged", message, status, body, state, regime,
+                     float(margin), parameters, uncertainties, covariance, names, res, chi2,
+                     dof, alternatives, objective)
+
+
+def acceptable_chi2(dof: int, quantile: float = ACCEPTABLE_CHI2_QUANTILE) -> float:
+    """The ``quantile`` of the chi^2 distribution with ``dof`` degrees of freedom.
+
+    Examples
+    --------
+    >>> round(acceptable_chi2(291), 1)                # 291 + about 3.1 sqrt(2 * 291)
+    371.3
+    """
+    return float(2.0 * gammaincinv(0.5 * dof, quantile))
+
+
+def stop_status(sol, chi2: float, dof: int) -> tuple[str, str]:
+    """The status of a fit (:class:`FitResult`) and its message, from the solver's stop
+    (``scipy.optimize.least_squares``'s ``status``, ``nfev``, ``message``) and the
+    chi^2 it stopped at."""
+    where = f"chi2 = {chi2:.6g} for {dof} degrees of freedom"
+    if sol.status == 0:                              # least_squares: max_nfev reached
+        if dof > 0 and chi2 <= acceptable_chi2(dof):
+            return "max_nfev at an acceptable chi2", (
+                f"max_nfev reached at an acceptable chi2: the solver stopped after "
+                f"{sol.nfev} evaluations ({sol.message}) at {where}, below the "
+                f"{ACCEPTABLE_CHI2_QUANTILE:.1%} quantile of its distribution "
+                f"({acceptable_chi2(dof):.6g}): the state fits the data, but the solver's "
+                "tolerances were not met; raise max_nfev to converge")
+        return "max_nfev", (f"not converged: the solver stopped ({sol.message}) at {where}; "
+                            "raise max_nfev, or start closer (starts=...)")
+    if not sol.success:
+        return "failed", str(sol.message)
+    if dof > 0 and chi2 > dof + CHI2_SIGMAS * np.sqrt(2.0 * dof):
+        return "local minimum", (
+            f"the solver stopped ({sol.message}) at {where}, "
+            f"{(chi2 - dof) / np.sqrt(2.0 * dof):.0f} sigma above its expectation: a local "
+            "minimum, or uncertainties that are too small; try other starts (starts=...) "
+            "or check the sigmas")
+    return "converged", str(sol.message)

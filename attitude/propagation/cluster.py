@@ -97,9 +97,14 @@ def local_cluster(n_workers: int = 2, *, threads_per_worker: int = 1, **kwargs):
                                    **kwargs)
         except RuntimeError as exc:
             raise AttitudeError(
-                f"the dask LocalCluster did not start ({exc}); in a script, start it under "
-                "'if __name__ == \"__main__\":' (its worker processes re-import the "
-                "script)") from exc
+                f"the dask LocalCluster did not start ({exc}): its worker processes died "
+                "starting (a worker's traceback is printed above). Each worker re-imports "
+                "the script that started it and runs its top level: either the cluster is "
+                "started there (start it under 'if __name__ == \"__main__\":'), or code "
+                "outside that guard fails or takes long when a worker runs it (reading a "
+                "missing file, a propagation: move it under the guard too), or "
+                "this machine cannot start the workers (memory, processes: fewer workers, "
+                "or processes=False)") from exc
         with cluster, Client(cluster) as client:     # restarted workers: same environment
             yield client
 

@@ -5,6 +5,12 @@ exact solution and Gaussian noise of known sigma; the fit starts from a perturbe
 Independent checks: the coverage of the 2-sigma intervals (a Gaussian 95.4 %), the
 convergence to the truth as the noise vanishes, the periods of the fitted state against
 the observed ones, and the parameter round trip through a state.
+
+The studies over many random cases assert statistics with bounds from their
+distributions (binomial counts, chi^2 quantiles), each with a false-alarm probability
+``ALPHA``, whatever path the optimiser takes on a given CPU and BLAS: a fit may stop
+converged or out of evaluations at an acceptable chi^2 (both are fits of the data), and
+one that does not fit the data must say so in its status.
 """
 
 import numpy as np
@@ -21,6 +27,13 @@ from attitude.fitting.synthetic import (
     synthetic_lightcurve,
 )
 from attitude.foundations.errors import AttitudeError
+from tests.fitting.fit_statistics import (
+    FITTED,
+    assert_status_is_consistent,
+    chi2_bounds,
+    coverage_floor,
+    most_unfitted,
+)
 
 BODY = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
 EPOCH = "2029-04-13T00:00:00"
@@ -64,24 +77,31 @@ def test_forward_model_equals_propagate():
 @pytest.mark.parametrize("regime", ["SAM", "LAM"])
 def test_two_sigma_intervals_cover_the_truth(regime):
     """25 random states per regime (50 in all), attitude data with 0.05 deg noise: the
-    fraction of (case, parameter) pairs inside the 2-sigma interval is >= 90 % (95.4 %
-    for a Gaussian; with 200 pairs per regime the binomial 3-sigma floor is ~91 %)."""
+    fits fit the data (statuses in FITTED but for the binomial few whose chi^2 exceeds
+    the acceptable quantile; chi^2 within its distribution's range), find the regime, and
+    the fraction of (case, parameter) pairs inside the 2-sigma interval is above the
+    binomial floor of a Gaussian's 95.4 % (about 91 % for 200 pairs)."""
     rng = np.random.default_rng(11 if regime == "SAM" else 12)
     sigma = np.radians(0.05)
     t = np.linspace(0.0, 30.0, 60)
-    inside = []
-    for _ in range(25):
+    inside, unfitted, n_cases = [], [], 25
+    for _ in range(n_cases):
         truth = _state(rng, regime)
         q = noisy_attitudes(att.propagate(BODY, truth, t).dataset["quaternion"].values, sigma, rng)
         guess = perturbed_state(truth, rng, 0.01)
         res = att.fit(att.AttitudeObservations(t, q, sigma), BODY, guess, multistart=False)
-        assert res.success and res.regime == regime
+        assert_status_is_consistent(res)
+        if res.status not in FITTED:
+            unfitted.append((res.status, res.chi2))
+            continue
+        assert res.regime == regime
+        lo, hi = chi2_bounds(res.dof, n_cases)
+        assert lo < res.chi2 < hi, (res.chi2, res.dof)
         p_true, _ = free_parameters(BODY, truth)
         d = parameter_differences(res.parameters, p_true)
         inside += [abs(d[name]) <= 2 * res.uncertainties[name] for name in PARAMETERS]
-        # chi2 of a good fit: dof +- a few sqrt(2 dof)
-        assert abs(res.chi2 - res.dof) < 5 * np.sqrt(2 * res.dof)
-    assert np.mean(inside) >= 0.90, np.mean(inside)
+    assert len(unfitted) <= most_unfitted(n_cases), unfitted
+    assert np.mean(inside) >= coverage_floor(len(inside)), np.mean(inside)
 
 
 def test_noise_free_fit_converges_to_the_truth():
@@ -195,8 +215,28 @@ def test_a_fit_that_does_not_converge_says_so():
     q = att.propagate(BODY, truth, t).dataset["quaternion"].values
     res = att.fit(att.AttitudeObservations(t, q, "0.01 deg"), BODY,
                   perturbed_state(truth, rng, 0.2), max_nfev=2, multistart=False)
-    assert not res.success
+    assert not res.success and res.status == "max_nfev"
     assert "maximum number of function evaluations" in res.message
+    assert_status_is_consistent(res)
+
+
+def test_out_of_evaluations_at_an_acceptable_chi2_says_so():
+    """Started at the truth with data of known noise, the solver stopped after its first
+    evaluations: chi^2 is that of the truth, chi^2(n)-distributed, below the acceptable
+    quantile of chi^2(dof) (by 1.6 sigma of the sum for this noise realisation; its
+    value at the truth is seeded, so no CPU path changes it by more than round-off)."""
+    rng = np.random.default_rng(10)
+    truth = _state(rng, "SAM")
+    t = np.linspace(0.0, 20.0, 30)
+    sigma = np.radians(0.05)
+    q = noisy_attitudes(att.propagate(BODY, truth, t).dataset["quaternion"].values,
+                        sigma, rng)
+    res = att.fit(att.AttitudeObservations(t, q, sigma), BODY, truth, max_nfev=1,
+                  multistart=False)
+    assert res.status == "max_nfev at an acceptable chi2" and not res.success
+    assert_status_is_consistent(res)
+    assert f"for {res.dof} degrees of freedom" in res.message
+    assert "raise max_nfev" in res.message
 
 
 def test_apophis_from_its_own_syntheticsynthetic_lightcurve():
@@ -215,41 +255,48 @@ def test_apophis_from_its_own_syntheticsynthetic_lightcurve():
                               sc.state.omega_body * [1.003, 0.997, 1.002])
     res = att.fit(att.LightcurveObservations(t, mag, 0.01, geom, shape), sc.body, guess,
                   multistart=False)
-    assert res.success and res.regime == "SAM"
+    assert_status_is_consistent(res)
+    assert res.status in FITTED and res.regime == "SAM", res.message
     p_true, _ = free_parameters(sc.body, sc.state)
     for name in ("energy_ratio", "ratio_a", "ratio_b"):
         assert abs(res.parameters[name] - p_true[name]) < 3 * res.uncertainties[name], name
     assert 0 < res.uncertainties["energy_ratio"] < 0.013
-    assert abs(res.chi2 - res.dof) < 5 * np.sqrt(2 * res.dof)
+    lo, hi = chi2_bounds(res.dof, 1)
+    assert lo < res.chi2 < hi, (res.chi2, res.dof)
 
 
 @pytest.mark.slow      # a long study (> 9 s); the slow tier, which CI runs
 def test_two_sigma_intervals_cover_the_truth_with_lightcurves():
     """12 random states (6 SAM, 6 LAM) seen as lightcurves of a triaxial ellipsoid
-    (0.02 mag): >= 90 % of the (case, parameter) pairs inside 2 sigma.  L is kept more
-    than 30 deg from the inertial pole, where the parameterisation is singular (RA of L
-    and phi0 turn about the same axis there; see attitude.fitting.parameters)."""
+    (0.02 mag): the (case, parameter) pairs inside 2 sigma above the binomial floor of a
+    Gaussian's 95.4 %.  L is kept more than 30 deg from the inertial pole, where the
+    parameterisation is singular (RA of L and phi0 turn about the same axis there; see
+    attitude.fitting.parameters).  A fit may stop converged or out of evaluations at an
+    acceptable chi^2 (both fit the data, whichever path the optimiser took on this CPU);
+    one that does not fit the data says so: a local minimum of the 80-facet mesh's kinked
+    chi^2 (facets crossing the terminator and the limb), or out of evaluations at a higher
+    chi^2, at most 2 of the 12 (the allowance for such minima from a 0.3 % start)."""
     shape = att.Polyhedron.ellipsoid_from_moments(BODY.principal_moments, subdivisions=1)
     geom = att.Geometry(sun=[1.0, 0.0, 0.0], observer=[np.cos(0.4), np.sin(0.4), 0.2])
     rng = np.random.default_rng(21)
     t = np.linspace(0.0, 120.0, 300)
     sigma = 0.02
-    inside, failed = [], 0
+    inside, unfitted = [], []
     for regime in ("SAM", "LAM") * 6:
         truth = random_state(BODY, regime, rng, epoch=EPOCH, max_abs_dec=np.radians(60))
         mag = synthetic_lightcurve(BODY, truth, t, geom, shape, sigma, rng)
         res = att.fit(att.LightcurveObservations(t, mag, sigma, geom, shape), BODY,
                       perturbed_state(truth, rng, 0.003), multistart=False)
-        if not res.success:       # a local minimum: reported, never a silent answer
-            assert "local minimum" in res.message and res.chi2 > 2 * res.dof
-            failed += 1
+        assert_status_is_consistent(res)  # reported for what it is, never a silent answer
+        if res.status not in FITTED:
+            unfitted.append((res.status, res.chi2, res.dof))
             continue
         assert res.regime == regime
         p_true, _ = free_parameters(BODY, truth)
         d = parameter_differences(res.parameters, p_true)
         inside += [abs(d[name]) <= 2 * res.uncertainties[name] for name in PARAMETERS]
-    assert failed <= 2
-    assert np.mean(inside) >= 0.90, np.mean(inside)
+    assert len(unfitted) <= 2, unfitted
+    assert np.mean(inside) >= coverage_floor(len(inside)), np.mean(inside)
 
 
 def test_attitude_fit_cli_end_to_end(tmp_path, capsys):

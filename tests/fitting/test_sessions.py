@@ -9,11 +9,18 @@ matrix), which the profiled fit must reproduce.
 """
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude.fitting import PARAMETERS, free_parameters
 from attitude.fitting.leastsq import project
+from tests.fitting.fit_statistics import (
+    ALPHA,
+    assert_status_is_consistent,
+    chi2_bounds,
+    chi2_distribution,
+)
 
 BODY = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
 TRUTH = att.AttitudeState("2029-04-13T00:00:00", Rotation.from_rotvec([0.4, -0.3, 0.8]),
@@ -55,20 +62,34 @@ def test_session_offsets_do_not_change_the_state_and_come_back():
     res = att.fit(att.LightcurveObservations(T, shifted, SIGMA, GEOM, SHAPE,
                                              sessions=NIGHT), BODY, _guess(),
                   multistart=False)
-    assert plain.success and res.success, (plain.message, res.message)
+    # both converged: the comparison below is of two optima (a fit out of evaluations,
+    # even at an acceptable chi2, would compare where the solver happened to stop)
+    assert plain.status == res.status == "converged", (plain.message, res.message)
     assert res.regime == plain.regime == "SAM"
     assert res.dof == plain.dof - 2 == T.size - 8 - 3        # three offsets, not one
+    # the same noise realisation: the plain fit's state fits the session data as well as
+    # the session fit's own, to what the data resolve: their chi2 (the offsets profiled
+    # out) differ by less than the (1 - ALPHA) quantile of chi2 with 8 degrees of freedom,
+    # a likelihood-ratio test of the 8 parameters.  Not parameter by parameter within a
+    # fraction of sigma: the facets make chi2 kinked, with local minima a fraction of a
+    # sigma apart, and where each fit stops among them depends on the rounding of the CPU
+    def chi2_of(fit):
+        r = res.objective.residuals(np.array([fit.parameters[n] for n in res.free]))[0]
+        return float(r[:-1] @ r[:-1])                 # without the domain penalty
+    # at its own optimum, up to the angles reduced modulo 2 pi (round-off of 2 pi, on a
+    # chi2 whose gradient vanishes there)
+    assert chi2_of(res) == pytest.approx(res.chi2, rel=1e-9)
+    assert abs(chi2_of(plain) - res.chi2) < chi2_distribution.isf(ALPHA, len(PARAMETERS))
     p_true, _ = free_parameters(BODY, TRUTH)
-    for name in PARAMETERS:
-        # the same noise realisation: the two fits differ by less than the stated
-        # 1-sigma, and both hold the truth within 3 sigma
-        d = _wrap(res.parameters[name] - plain.parameters[name], name)
-        assert abs(d) < res.uncertainties[name], name
+    for name in PARAMETERS:     # both hold the truth within 3 sigma
         assert abs(_wrap(res.parameters[name] - p_true[name], name)) \
             < 3 * res.uncertainties[name], name
+        assert abs(_wrap(plain.parameters[name] - p_true[name], name)) \
+            < 3 * plain.uncertainties[name], name
     # chi2 of the session fit: the plain fit's minimum plus what the two extra offsets
     # absorb (nothing here: the data were made with one zero point per night)
-    assert abs(res.chi2 - res.dof) < 5 * np.sqrt(2 * res.dof)
+    lo, hi = chi2_bounds(res.dof, 1)
+    assert lo < res.chi2 < hi, (res.chi2, res.dof)
     (lc,) = res.lightcurve_offsets()
     (lc0,) = plain.lightcurve_offsets()
     np.testing.assert_array_equal(lc["session"], [0, 1, 2])
@@ -91,7 +112,8 @@ def test_profiled_covariance_equals_the_joint_fit_marginal():
     shifted = _data(rng) + OFFSETS[NIGHT]
     obs = att.LightcurveObservations(T, shifted, SIGMA, GEOM, SHAPE, sessions=NIGHT)
     res = att.fit(obs, BODY, _guess(), multistart=False)
-    assert res.success
+    assert_status_is_consistent(res)
+    assert res.status in ("converged", "max_nfev at an acceptable chi2"), res.message
     objective = res.objective
     x = np.array([res.parameters[n] for n in res.free])
     h = np.maximum(np.finfo(float).eps ** (1 / 3) * np.abs(x), 1e-8)
