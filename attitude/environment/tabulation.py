@@ -17,6 +17,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
+from attitude.foundations.cubic import cubic_rate, cubic_value
+
 from ..foundations.errors import QuantityError
 
 __all__ = ["TimeTable"]
@@ -133,8 +135,8 @@ class TimeTable:
         i = min(max(int((x - nodes[0]) / self.spacing), 0), c.shape[1] - 1)
         d = x - nodes[i]
         if nu == 0:
-            return ((c[0, i] * d + c[1, i]) * d + c[2, i]) * d + c[3, i]
-        return (3.0 * c[0, i] * d + 2.0 * c[1, i]) * d + c[2, i]
+            return cubic_value(c[0, i], c[1, i], c[2, i], c[3, i], d)
+        return cubic_rate(c[0, i], c[1, i], c[2, i], d)
 
     def _call(self, t, nu: int) -> np.ndarray:
         t = np.asarray(t, dtype=float)

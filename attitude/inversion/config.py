@@ -166,7 +166,13 @@ def load_inversion(path) -> InversionScenario:
 @dataclass(frozen=True, eq=False)
 class InversionRun:
     """The outcome of :func:`run_inversion`: the result, the ``[expect]`` checks (the
-    dicts of the ``--report``) and the files written."""
+    dicts of the ``--report``) and the files written.
+
+    Examples
+    --------
+    >>> InversionRun("x", None, [{"ok": True}, {"ok": False}], []).ok
+    False
+    """
 
     name: str
     result: InversionResult
@@ -191,6 +197,25 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
         Stem of the outputs (default: ``[inversion] output``, else the scenario's stem).
     write_outputs : bool
         False for a check that writes nothing.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from attitude.inversion.invert import _example_observations
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> lines = ["3"]
+    >>> for obs in _example_observations():
+    ...     sun, seen = obs.sun_and_observer()
+    ...     lines.append(f"{len(obs)} 0")
+    ...     lines += [" ".join(repr(float(x)) for x in (jd, y, *s, *o))
+    ...               for jd, y, s, o in zip(obs.times.tdb.jd, obs.brightness, sun, seen)]
+    >>> _ = (folder / "lcs").write_text("\\n".join(lines) + "\\n")
+    >>> _ = (folder / "x.toml").write_text(
+    ...     '[scenario]\\nname = "x"\\n[inversion]\\nlightcurves = "lcs"\\ntime_scale = "tdb"\\n'
+    ...     'period = "2 h"\\nrows = 4\\ndegree = 2\\n[expect]\\nrms = { max = 1e-6 }\\n')
+    >>> run = run_inversion(load_inversion(folder / "x.toml"))
+    >>> run.ok, [p.name for p in run.outputs]
+    (True, ['x_shape.obj', 'x_state.toml', 'x_lightcurves.csv'])
     """
     cfg = scenario.inversion
     data = (scenario.path.parent / cfg["lightcurves"])

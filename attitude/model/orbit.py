@@ -53,6 +53,8 @@ __all__ = [
     "solve_kepler",
     "solve_kepler_scalar",
     "mean_from_eccentric",
+    "kepler_position",
+    "kepler_velocity",
 ]
 
 _EPS = np.finfo(float).eps
@@ -265,6 +267,43 @@ def _check_angle(value, key: str) -> float:
     return x
 
 
+def kepler_position(a, e, root, toward_periapsis, ahead, cos_e, sin_e):
+    """Position on a Kepler orbit from the eccentric anomaly: ``r = a ((cos E - e) P +
+    b sin E Q)`` (``root = b = sqrt(1 - e^2)``; ``toward_periapsis = P`` and ``ahead = Q``
+    the unit vectors toward periapsis and 90 deg ahead in the plane, 3-tuples).  The one
+    source of the formula: ``cos_e``, ``sin_e`` floats (the compiled kernels) or arrays
+    (:meth:`KeplerOrbit.state`); returns the components as a tuple.
+
+    Examples
+    --------
+    >>> kepler_position(2.0, 0.5, 0.75 ** 0.5, (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), 1.0, 0.0)
+    (1.0, 0.0, 0.0)
+    """
+    p, q = toward_periapsis, ahead
+    ce = cos_e - e
+    bs = root * sin_e
+    return (a * (ce * p[0] + bs * q[0]), a * (ce * p[1] + bs * q[1]),
+            a * (ce * p[2] + bs * q[2]))
+
+
+def kepler_velocity(mu, a, e, root, toward_periapsis, ahead, cos_e, sin_e):
+    """Velocity on a Kepler orbit from the eccentric anomaly: ``v = sqrt(mu a) / r
+    (-sin E P + b cos E Q)`` with ``r = a (1 - e cos E)``; arguments as
+    :func:`kepler_position`.
+
+    Examples
+    --------
+    >>> v = kepler_velocity(1.0, 1.0, 0.0, 1.0, (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), 1.0, 0.0)
+    >>> [float(x) for x in v]                   # circular: speed sqrt(mu / a), along Q
+    [0.0, 1.0, 0.0]
+    """
+    p, q = toward_periapsis, ahead
+    f = np.sqrt(mu * a) / (a * (1.0 - e * cos_e))
+    bc = root * cos_e
+    return (f * (-sin_e * p[0] + bc * q[0]), f * (-sin_e * p[1] + bc * q[1]),
+            f * (-sin_e * p[2] + bc * q[2]))
+
+
 @dataclass(frozen=True)
 class KeplerOrbit:
     """A two-body elliptic orbit of the body about a point-mass primary.
@@ -473,14 +512,14 @@ class KeplerOrbit:
 
     def state(self, t) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and velocity (m/s), each of shape ``S + (3,)``."""
-        E = self.eccentric_anomaly(t)[..., None]
+        E = self.eccentric_anomaly(t)
         P, Q, _ = self._frame()
-        b = np.sqrt(1.0 - self.e**2)
+        p, q = tuple(P.tolist()), tuple(Q.tolist())
+        b = float(np.sqrt(1.0 - self.e**2))
         cE, sE = np.cos(E), np.sin(E)
-        r = self.a * ((cE - self.e) * P + b * sE * Q)
-        rn = self.a * (1.0 - self.e * cE)
-        v = np.sqrt(self.mu * self.a) / rn * (-sE * P + b * cE * Q)
-        return r, v
+        r = kepler_position(self.a, self.e, b, p, q, cE, sE)
+        v = kepler_velocity(self.mu, self.a, self.e, b, p, q, cE, sE)
+        return np.stack(r, axis=-1), np.stack(v, axis=-1)
 
 
 # --- user-supplied paths --------------------------------------------------------------

@@ -81,10 +81,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..foundations.cubic import cubic_rate, cubic_value
 from ..foundations.errors import InvalidStateError
 from ..foundations.quaternion import rotate_parts
 from ..model.body import RigidBody
-from ..model.orbit import solve_kepler_scalar
+from ..model.orbit import kepler_position, kepler_velocity, solve_kepler_scalar
 from ..model.shadow import illumination_fraction
 from ..model.torques import TorqueModel
 from ..model.torques.dissipation import dissipation_torque
@@ -131,6 +132,10 @@ _UNIFORM, _DIPOLE = 0.0, 1.0
 #: below is ``jit_formula(f)`` of the function ``f`` the model's ``evaluate`` calls.
 FORMULAS = {
     "_eccentric_anomaly": solve_kepler_scalar,     # attitude.model.orbit.solve_kepler
+    "_kepler_position": kepler_position,           # attitude.model.orbit.KeplerOrbit.state
+    "_kepler_velocity": kepler_velocity,
+    "_cubic_value": cubic_value,                   # attitude.environment.TimeTable
+    "_cubic_rate": cubic_rate,
     "_illumination_fraction": illumination_fraction,
     "_to_body": rotate_parts,
     "_gravity_gradient": gravity_gradient_torque,
@@ -149,11 +154,11 @@ FORMULAS = {
     "_drag_pressure": drag_pressure,
     "_drag_torque": drag_torque,
 }
-(_eccentric_anomaly, _illumination_fraction, _to_body, _gravity_gradient, _heavy_top,
- _eddy_current, _magnetic_dipole, _dissipation, _dipole_direction, _dipole_field,
- _sunlight, _facing, _radiation_weights, _radiation_torque, _corotating_air,
- _exponential_density, _drag_pressure, _drag_torque) = (jit_formula(f)
-                                                        for f in FORMULAS.values())
+(_eccentric_anomaly, _kepler_position, _kepler_velocity, _cubic_value, _cubic_rate,
+ _illumination_fraction, _to_body, _gravity_gradient, _heavy_top, _eddy_current,
+ _magnetic_dipole, _dissipation, _dipole_direction, _dipole_field, _sunlight, _facing,
+ _radiation_weights, _radiation_torque, _corotating_air, _exponential_density,
+ _drag_pressure, _drag_torque) = (jit_formula(f) for f in FORMULAS.values())
 
 
 @_jit
@@ -189,23 +194,21 @@ def _piecewise(params, i, t):
     """The piecewise cubic block at ``params[i]`` at ``t``, Horner's rule (as
     :class:`attitude.environment.TimeTable`)."""
     j, stride, d = _interval(params, i, t)
-    return (((params[j] * d + params[j + stride]) * d + params[j + 2 * stride]) * d
-            + params[j + 3 * stride],
-            ((params[j + 1] * d + params[j + 1 + stride]) * d + params[j + 1 + 2 * stride])
-            * d + params[j + 1 + 3 * stride],
-            ((params[j + 2] * d + params[j + 2 + stride]) * d + params[j + 2 + 2 * stride])
-            * d + params[j + 2 + 3 * stride])
+    return (_cubic_value(params[j], params[j + stride], params[j + 2 * stride],
+                         params[j + 3 * stride], d),
+            _cubic_value(params[j + 1], params[j + 1 + stride], params[j + 1 + 2 * stride],
+                         params[j + 1 + 3 * stride], d),
+            _cubic_value(params[j + 2], params[j + 2 + stride], params[j + 2 + 2 * stride],
+                         params[j + 2 + 3 * stride], d))
 
 
 @_jit
 def _piecewise_rate(params, i, t):
     """The time derivative of the piecewise cubic block at ``params[i]`` at ``t``."""
     j, stride, d = _interval(params, i, t)
-    return ((3.0 * params[j] * d + 2.0 * params[j + stride]) * d + params[j + 2 * stride],
-            (3.0 * params[j + 1] * d + 2.0 * params[j + 1 + stride]) * d
-            + params[j + 1 + 2 * stride],
-            (3.0 * params[j + 2] * d + 2.0 * params[j + 2 + stride]) * d
-            + params[j + 2 + 2 * stride])
+    return (_cubic_rate(params[j], params[j + stride], params[j + 2 * stride], d),
+            _cubic_rate(params[j + 1], params[j + 1 + stride], params[j + 1 + 2 * stride], d),
+            _cubic_rate(params[j + 2], params[j + 2 + stride], params[j + 2 + 2 * stride], d))
 
 
 @_jit
@@ -216,15 +219,11 @@ def _velocity(params, i, t):
     if kind == _FIXED:
         return 0.0, 0.0, 0.0
     if kind == _KEPLER:
-        a, e, b = params[i + 1], params[i + 2], params[i + 3]
-        M = params[i + 4] + params[i + 5] * t
-        E = _eccentric_anomaly(M, e, 50)
-        cE, sE = math.cos(E), math.sin(E)
-        f = math.sqrt(params[i + 6] * a) / (a * (1.0 - e * cE))
-        bc = b * cE
-        return (f * (-sE * params[i + 7] + bc * params[i + 10]),
-                f * (-sE * params[i + 8] + bc * params[i + 11]),
-                f * (-sE * params[i + 9] + bc * params[i + 12]))
+        e = params[i + 2]
+        E = _eccentric_anomaly(params[i + 4] + params[i + 5] * t, e, 50)
+        return _kepler_velocity(params[i + 6], params[i + 1], e, params[i + 3],
+                                _three(params, i + 7), _three(params, i + 10),
+                                math.cos(E), math.sin(E))
     return _piecewise_rate(params, i + 1, t)
 
 
@@ -314,15 +313,10 @@ def _position(params, i, t):
     if kind == _FIXED:
         return params[i + 1], params[i + 2], params[i + 3]
     if kind == _KEPLER:
-        a, e, b = params[i + 1], params[i + 2], params[i + 3]
-        M = params[i + 4] + params[i + 5] * t
-        E = _eccentric_anomaly(M, e, 50)
-        cE, sE = math.cos(E), math.sin(E)
-        ce = cE - e
-        bs = b * sE
-        return (a * (ce * params[i + 7] + bs * params[i + 10]),
-                a * (ce * params[i + 8] + bs * params[i + 11]),
-                a * (ce * params[i + 9] + bs * params[i + 12]))
+        e = params[i + 2]
+        E = _eccentric_anomaly(params[i + 4] + params[i + 5] * t, e, 50)
+        return _kepler_position(params[i + 1], e, params[i + 3], _three(params, i + 7),
+                                _three(params, i + 10), math.cos(E), math.sin(E))
     return _piecewise(params, i + 1, t)
 
 

@@ -63,7 +63,7 @@ KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
                   "../model/torques/magnetic_dipole.py",
                   "../model/torques/dissipation.py", "../model/torques/fields.py",
                   "../model/torques/surface_forces.py", "../foundations/quaternion.py",
-                  "../foundations/elliptic.py")
+                  "../foundations/elliptic.py", "../foundations/cubic.py")
 #: The sources compiled into the kernels (all of :data:`KERNEL_MODULES`).
 KERNEL_SOURCES = KERNEL_MODULES
 

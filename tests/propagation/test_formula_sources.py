@@ -22,7 +22,9 @@ import numpy as np
 import pytest
 
 from attitude.environment import AerodynamicDrag, ExponentialAtmosphere, SolarRadiationPressure
+from attitude.environment.tabulation import TimeTable
 from attitude.model import freebody as fb
+from attitude.model.orbit import KeplerOrbit
 from attitude.model.torques import (
     EddyCurrentDamping,
     EnergyDissipation,
@@ -114,6 +116,8 @@ def _calls(method) -> set[str]:
     (AerodynamicDrag._facing, {"facing"}),
     (AerodynamicDrag.evaluate, {"drag_torque"}),
     (ExponentialAtmosphere.density, {"exponential_density"}),
+    (KeplerOrbit.state, {"kepler_position", "kepler_velocity"}),
+    (TimeTable._horner, {"cubic_value", "cubic_rate"}),
 ], ids=lambda x: getattr(x, "__qualname__", None))
 def test_each_model_calls_its_formula(method, formulas):
     assert formulas <= _calls(method)
@@ -125,7 +129,8 @@ def _random_arguments(rng, function):
     draw = {  # name -> shape of one value (3: a vector, 9: a matrix, 0: a number)
         "inertia": 9, "tensor": 9, "r": 3, "w": 3, "b": 3, "up": 3, "lever": 3,
         "moment": 3, "m_hat": 3, "sun": 3, "body": 3, "W": 3, "U": 3, "s": 3, "S": 3,
-        "v": 3, "v_hat": 3, "normal": 3, "direction": 3,
+        "v": 3, "v_hat": 3, "normal": 3, "direction": 3, "toward_periapsis": 3,
+        "ahead": 3,
     }
     floats, arrays = [], []
     for name in inspect.signature(function).parameters:
