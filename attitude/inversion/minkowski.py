@@ -76,8 +76,9 @@ def facet_mesh(normals, support, *, merge: float = 1e-9) -> tuple[np.ndarray, np
     fan of triangles around its centroid.  Which corners bound which facet comes from
     Qhull's half-space intersection (the planes through each corner), not from a distance
     test, so neighbouring facets agree on their common edges; corners closer than
-    ``merge`` times the size are one, and a facet smaller than ``merge`` squared times the
-    total area is shrunk to a point (its neighbours then meet there).
+    ``merge`` times the size are one; where a fan triangle would still be too thin for a
+    shape model, the two corners of its short edge become one, or a sliver of a facet
+    shrinks to a point (its neighbours then meet there).
 
     Returns
     -------
@@ -122,43 +123,52 @@ def facet_mesh(normals, support, *, merge: float = 1e-9) -> tuple[np.ndarray, np
                 members.setdefault(j, set()).add(r)
         return members
 
-    # shrink the facets too small to triangulate cleanly to one point
-    members = rings()
-    total = 0.0
-    polygon_area = {}
-    for j, ring in members.items():
-        ring = np.array(sorted(ring))
-        if ring.size < 3:
-            continue
-        d = corner[ring] - corner[ring].mean(axis=0)
-        polygon_area[j] = 0.5 * np.linalg.norm(d.T @ d) ** 0.5 if ring.size else 0.0
-        total += polygon_area[j]
-    for j, area in polygon_area.items():
-        if area < merge * merge * total:
-            ring = sorted(members[j])
-            for v in ring[1:]:
-                parent[root(v)] = root(ring[0])
-    members = rings()
-    roots = sorted({root(v) for v in range(parent.size)})
-    index = {r: k for k, r in enumerate(roots)}
-    position = np.zeros((len(roots), 3))
-    counts = np.zeros(len(roots))
-    for v in range(parent.size):
-        position[index[root(v)]] += corner[v]
-        counts[index[root(v)]] += 1
-    position /= counts[:, None]
+    def fans():
+        """Each facet's corners (roots) in counter-clockwise order, with the positions."""
+        members = rings()
+        roots = sorted({root(v) for v in range(parent.size)})
+        index = {r: k for k, r in enumerate(roots)}
+        position = np.zeros((len(roots), 3))
+        counts = np.zeros(len(roots))
+        for v in range(parent.size):
+            position[index[root(v)]] += corner[v]
+            counts[index[root(v)]] += 1
+        position /= counts[:, None]
+        out = []
+        for j in sorted(members):
+            ring = np.array([index[r] for r in members[j]])
+            if ring.size < 3:
+                continue
+            centre = position[ring].mean(axis=0)
+            d = position[ring] - centre
+            u = d[np.argmax(np.linalg.norm(d, axis=1))]
+            u = u / np.linalg.norm(u)
+            w = np.cross(normals[j], u)
+            out.append((centre, ring[np.argsort(np.arctan2(d @ w, d @ u))]))
+        return roots, position, out
+
+    # a fan triangle too thin for a shape model (twice its area within 100 times the
+    # Polyhedron's degenerate bound, 1e-12 size^2): its short edge's corners become one,
+    # or, on a sliver of a facet, the whole facet shrinks to a point; until none is left
+    for _ in range(50):
+        roots, position, facets = fans()
+        thin = None
+        for centre, ring in facets:
+            nxt = np.roll(ring, -1)
+            twice = np.linalg.norm(np.cross(position[ring] - centre,
+                                            position[nxt] - centre), axis=1)
+            k = int(np.argmin(twice))
+            if twice[k] <= 1e-10 * size * size:
+                edge = np.linalg.norm(position[ring[k]] - position[nxt[k]])
+                thin = [ring[k], nxt[k]] if edge <= 1e-5 * size else list(ring)
+                break
+        if thin is None:
+            break
+        for k in thin[1:]:
+            parent[root(roots[k])] = root(roots[thin[0]])
     vertices, faces = [position], []
     count = len(roots)
-    for j in sorted(members):
-        ring = np.array([index[r] for r in members[j]])
-        if ring.size < 3:
-            continue
-        centre = position[ring].mean(axis=0)
-        d = position[ring] - centre
-        u = d[np.argmax(np.linalg.norm(d, axis=1))]
-        u = u / np.linalg.norm(u)
-        w = np.cross(normals[j], u)
-        ring = ring[np.argsort(np.arctan2(d @ w, d @ u))]          # counter-clockwise
+    for centre, ring in facets:
         vertices.append(centre[None, :])
         faces.append(np.stack([np.full(ring.size, count), ring, np.roll(ring, -1)], axis=1))
         count += 1

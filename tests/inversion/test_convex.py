@@ -214,3 +214,18 @@ def test_minkowski_rejects_what_is_not_a_gaussian_image():
         polyhedron_from_areas(n, [1, 1, 1, 1, 1, -1])
     with pytest.raises(ShapeModelError, match="normals"):
         polyhedron_from_areas(n, [1, 1, 1])
+
+
+@pytest.mark.parametrize("cut", [1e-7, 1e-4])
+def test_a_tiny_facet_still_gives_a_valid_shape_model(cut):
+    """A cube with one corner cut by a plane ``cut`` inside it: a facet of side ~cut.  The
+    mesh must be a valid Polyhedron (no sliver triangle).  Where the facet is too small to
+    triangulate its corners become one point, moved by at most ~cut: the volume changes by
+    at most that times the area of the three faces it touches (3 x 4)."""
+    from attitude.inversion.minkowski import facet_mesh
+    from attitude.model.shape import Polyhedron
+    diagonal = np.ones(3) / np.sqrt(3)
+    n = np.vstack([np.eye(3), -np.eye(3), diagonal])
+    h = np.append(np.ones(6), np.sqrt(3) - cut)
+    shape = Polyhedron(*facet_mesh(n, h))
+    assert shape.volume == pytest.approx(8.0, abs=12.0 * cut)
