@@ -13,7 +13,7 @@ The package is laid out in layers (docs/architecture.md): ``attitude.foundations
 ``attitude.model`` (bodies, shapes, states, orbits, torques, ephemerides, populations),
 ``attitude.propagation``, ``attitude.analysis`` (diagnostics, classification, Lyapunov
 exponents, statistics), the wings (``formats``, ``photometry``, ``fitting``,
-``environment``, ``spinorbit``) and ``attitude.app`` (scenario files, the CLI, plots).
+``environment``, ``spinorbit``, ``inversion``, ``pictures``, ``binary``) and ``attitude.app`` (scenario files, the CLI, plots).
 
 The public names are in ``__all__``; each is imported on first use, so that
 ``import attitude`` (and ``attitude --help``) loads no more than the exceptions.
@@ -62,10 +62,11 @@ _OWNERS = {
     "read_lightcurve": "photometry",
     "invert": "inversion", "period_scan": "inversion", "read_damit_lightcurves": "inversion",
     "InversionResult": "inversion",
+    "BinarySystem": "binary", "BinaryState": "binary", "Impulse": "binary",
 }
 
 #: Namespaces of the public API that are modules (``att.torques.GravityGradient``).
-_NAMESPACES = ("torques", "ensemble", "spindown")
+_NAMESPACES = ("torques", "ensemble", "spindown", "binary")
 
 __all__ = ["__version__", *_OWNERS, "torques", *_error_names]
 

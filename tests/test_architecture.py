@@ -93,7 +93,8 @@ IMPORTS_BY_NAME = {
                                         "namespaces are outside the cycle test; and "
                                         "lazy.WING_METHODS: Ephemeris.animate/view run "
                                         "attitude.pictures, a wing the model layer may "
-                                        "not import (imported on the first call)"),
+                                        "not import (imported on the first call), and "
+                                        "propagate(BinarySystem) runs attitude.binary"),
     "attitude.app.cli": ("COMMANDS", "each command's module is imported when it runs, so "
                                      "that `attitude --help` loads no numpy (issue 25)"),
 }
@@ -183,7 +184,7 @@ def test_imports_inside_functions_are_optional_or_costly():
 LAYERS = ("foundations", "model", "propagation", "analysis", "wings", "application")
 
 #: The wings: each imports the layers below and its own modules, not another wing.
-WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit", "inversion",
+WINGS = ("formats", "photometry", "fitting", "environment", "spinorbit", "inversion", "binary",
          "pictures")
 
 #: Wings that build on another wing, with the reason: the only imports between wings.

@@ -31,6 +31,7 @@ __all__ = [
     "TorqueConfigError",
     "DiagnosticsError",
     "InsufficientDataError",
+    "BinarySystemError",
     "ClassificationError",
     "SpinOrbitError",
     "MissingDependencyError",
@@ -314,6 +315,24 @@ class SpinOrbitError(AttitudeError, ValueError):
     ... except SpinOrbitError as err:
     ...     print(err)
     e: must be in [0, 1), got 1.2
+    """
+
+
+class BinarySystemError(AttitudeError, ValueError):
+    """A binary system that cannot be set up: a body without a mass, a mutual potential
+    asked beyond order 2 of a body known only by its moments, an impulse on an unknown
+    body, colliding bodies.
+
+    Examples
+    --------
+    >>> import attitude as att
+    >>> try:
+    ...     att.BinarySystem(att.RigidBody.from_principal_moments([1.0, 2.0, 2.5], mass=3.0),
+    ...                      att.RigidBody.from_principal_moments([1.0, 1.0, 1.0], mass=1.0),
+    ...                      order=4)
+    ... except BinarySystemError as err:
+    ...     print(str(err)[:60])
+    primary: a body known only by its moments has no mutual pote
     """
 
 

@@ -2,7 +2,8 @@
 namespaces that load nothing until a name is read (``attitude``, ``attitude.formats``),
 and of the methods of the model layer that a wing carries out (:data:`WING_METHODS`:
 ``Ephemeris.animate`` and ``Ephemeris.view`` draw with :mod:`attitude.pictures`, which
-the model layer may not import)."""
+the model layer may not import; ``att.propagate`` of a ``BinarySystem`` runs
+:mod:`attitude.binary.propagate`, which the propagation layer may not import)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ __all__ = ["owned_attribute", "wing_method", "WING_METHODS"]
 WING_METHODS = {
     "Ephemeris.animate": ("attitude.pictures.animation", "animate"),
     "Ephemeris.view": ("attitude.pictures.viewer", "view"),
+    "propagate.BinarySystem": ("attitude.binary.propagate", "propagate_binary"),
 }
 
 

@@ -37,6 +37,7 @@ from ..foundations.quantities import to_si
 from .shape import Polyhedron
 
 __all__ = [
+    "MassDistribution",
     "MassProperties",
     "RigidBody",
     "SYMMETRY_RTOL",
@@ -217,6 +218,49 @@ def check_inertia(inertia) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
     return moments, axes, dict(sorted(invalid.items()))
 
 
+@dataclass(frozen=True, eq=False)
+class MassDistribution:
+    """Where a homogeneous body's mass lies, beyond its inertia tensor: what the mutual
+    gravity of two bodies needs to every order (:mod:`attitude.binary`).
+
+    Parameters
+    ----------
+    kind : {"sphere", "ellipsoid", "polyhedron"}
+    mass : float
+        kg.
+    semi_axes : (3,) array, optional
+        m, along the part's x, y, z (sphere: three equal radii), centred on the origin.
+    shape : Polyhedron, optional
+        The solid (vertices in m, in the body frame), of uniform density.
+
+    Examples
+    --------
+    >>> from attitude import MassProperties
+    >>> MassProperties.solid_ellipsoid(2.0, [3.0, 2.0, 1.0]).distribution.kind
+    'ellipsoid'
+    """
+
+    kind: str
+    mass: float
+    semi_axes: np.ndarray | None = None
+    shape: Polyhedron | None = None
+
+    def __post_init__(self):
+        if self.kind not in ("sphere", "ellipsoid", "polyhedron"):
+            raise InvalidInertiaError(f"distribution: unknown kind {self.kind!r}; expected "
+                                      "sphere, ellipsoid or polyhedron")
+        if (self.shape is None) == (self.kind == "polyhedron"):
+            raise InvalidInertiaError("distribution: a polyhedron needs its shape, and "
+                                      "only a polyhedron has one")
+        if self.semi_axes is not None:
+            object.__setattr__(self, "semi_axes", _copy(np.asarray(self.semi_axes, float)))
+
+    @property
+    def center_of_mass(self) -> np.ndarray:
+        """m, in the body frame."""
+        return np.zeros(3) if self.shape is None else self.shape.centroid
+
+
 def _parallel_axis(mass: float, r: np.ndarray) -> np.ndarray:
     """Steiner term ``m (|r|^2 1 - r r^T)``: inertia of a point mass at ``r``."""
     return mass * (np.dot(r, r) * np.eye(3) - np.outer(r, r))
@@ -253,6 +297,10 @@ class MassProperties:
     mass: float
     center_of_mass: np.ndarray
     inertia: np.ndarray
+    #: How the mass lies (a homogeneous primitive or shape), where known: what the
+    #: mutual gravity of a binary needs beyond order 2.  A placed or composite part
+    #: has none.
+    distribution: MassDistribution | None = field(default=None, repr=False)
 
     def __post_init__(self):
         mass = _positive(self.mass, "kg", "mass")
@@ -281,8 +329,10 @@ class MassProperties:
         """
         offset = _vector(offset, "m", "offset")
         rot = np.eye(3) if orientation is None else _single_rotation(orientation).as_matrix()
+        unmoved = not offset.any() and np.array_equal(rot, np.eye(3))
         return MassProperties(self.mass, offset + rot @ self.center_of_mass,
-                              rot @ self.inertia @ rot.T)
+                              rot @ self.inertia @ rot.T,
+                              self.distribution if unmoved else None)
 
     def inertia_about(self, point=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Inertia tensor about ``point`` (parallel-axis theorem), kg m^2."""
@@ -343,7 +393,8 @@ class MassProperties:
         """Homogeneous solid ball: ``2/5 m r^2``."""
         m = _positive(mass, "kg", "mass")
         r = _positive(radius, "m", "radius")
-        return cls(m, np.zeros(3), np.eye(3) * 0.4 * m * r**2)
+        return cls(m, np.zeros(3), np.eye(3) * 0.4 * m * r**2,
+                   MassDistribution("sphere", m, semi_axes=[r, r, r]))
 
     @classmethod
     def spherical_shell(cls, mass, radius, inner_radius=None) -> MassProperties:
@@ -367,7 +418,8 @@ class MassProperties:
         m = _positive(mass, "kg", "mass")
         a, b, c = _lengths(semi_axes, 3, "semi_axes")
         return cls(m, np.zeros(3), np.diag(m / 5 * np.array([b**2 + c**2, a**2 + c**2,
-                                                                  a**2 + b**2])))
+                                                                  a**2 + b**2])),
+                   MassDistribution("ellipsoid", m, semi_axes=[a, b, c]))
 
     @classmethod
     def thin_rod(cls, mass, length) -> MassProperties:
@@ -480,6 +532,9 @@ class RigidBody:
     mass: float | None = None
     center_of_mass: np.ndarray = field(default_factory=lambda: np.zeros(3))
     name: str = ""
+    #: How the mass lies (:class:`MassDistribution`), where the body was made from a
+    #: primitive or a shape model; ``None`` for a body known by its moments.
+    distribution: MassDistribution | None = field(default=None, repr=False)
     principal_moments: np.ndarray = field(init=False, repr=False)
     principal_axes: np.ndarray = field(init=False, repr=False)
 
@@ -520,7 +575,7 @@ class RigidBody:
     def from_mass_properties(cls, props: MassProperties, *, name: str = "") -> RigidBody:
         """The body of a (composite) part, about its centre of mass."""
         return cls(props.inertia, mass=props.mass, center_of_mass=props.center_of_mass,
-                   name=name)
+                   name=name, distribution=props.distribution)
 
     @classmethod
     def from_parts(cls, parts: Iterable[MassProperties], *, name: str = "") -> RigidBody:
@@ -540,9 +595,10 @@ class RigidBody:
         length_unit : str or astropy unit
             Unit of the vertex coordinates (asteroid models are usually in ``"km"``).
         """
-        mass, com, inertia = Polyhedron.from_obj(path, length_unit=length_unit
-                                                 ).mass_properties(density)
-        return cls(inertia, mass=mass, center_of_mass=com, name=name)
+        shape = Polyhedron.from_obj(path, length_unit=length_unit)
+        mass, com, inertia = shape.mass_properties(density)
+        return cls(inertia, mass=mass, center_of_mass=com, name=name,
+                   distribution=MassDistribution("polyhedron", mass, shape=shape))
 
     # --- derived --------------------------------------------------------------
     @property

@@ -19,6 +19,7 @@ from astropy.time import Time
 
 from ..foundations import quaternion as quat
 from ..foundations.errors import InvalidStateError
+from ..foundations.lazy import wing_method
 from ..foundations.quantities import to_si
 from ..model.body import RigidBody, as_bodies
 from ..model.ephemeris import Ephemeris
@@ -180,6 +181,9 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     >>> eph.conservation()["energy_rel_drift"] < 1e-13
     True
     """
+    if getattr(body, "wing_propagator", None):   # a BinarySystem: the binary wing's own
+        return wing_method(body.wing_propagator)(body, state, times, method=method, rtol=rtol,
+                                                 step=step, events=events, progress=progress)
     if isinstance(body, Ensemble) and times is None:
         state, times = None, state
     if times is None:

@@ -1,0 +1,19 @@
+"""The binary wing: two rigid bodies that torque each other (the full two-body problem).
+
+Modules: ``integrals`` (each body's inertia integrals to order N), ``mutual`` (the
+mutual potential, force and torques), ``system`` (:class:`BinarySystem`,
+:class:`BinaryState`, :class:`Impulse`), ``dynamics`` (equations of motion, DOP853),
+``propagate`` (the ephemeris of a binary).
+"""
+
+from __future__ import annotations
+
+from attitude.binary.integrals import InertiaIntegrals, inertia_integrals, multi_indices, rotated
+from attitude.binary.mutual import MutualForces, MutualGravity
+from attitude.binary.propagate import propagate_binary
+from attitude.binary.system import BODIES, BinaryState, BinarySystem, Impulse
+from attitude.foundations.constants import G
+
+__all__ = ["InertiaIntegrals", "inertia_integrals", "multi_indices", "rotated", "MutualForces",
+           "MutualGravity", "BinarySystem", "BinaryState", "Impulse", "BODIES",
+           "propagate_binary", "G"]
