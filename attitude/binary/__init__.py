@@ -3,11 +3,19 @@
 Modules: ``integrals`` (each body's inertia integrals to order N), ``mutual`` (the
 mutual potential, force and torques), ``system`` (:class:`BinarySystem`,
 :class:`BinaryState`, :class:`Impulse`), ``dynamics`` (equations of motion, DOP853),
-``propagate`` (the ephemeris of a binary).
+``propagate`` (the ephemeris of a binary), ``diagnostics`` (periods, libration, regime:
+:func:`diagnose`).
 """
 
 from __future__ import annotations
 
+from attitude.binary.diagnostics import (
+    BinaryDiagnosis,
+    PeriodChange,
+    diagnose,
+    libration_angle,
+    period_change,
+)
 from attitude.binary.integrals import InertiaIntegrals, inertia_integrals, multi_indices, rotated
 from attitude.binary.mutual import MutualForces, MutualGravity
 from attitude.binary.propagate import propagate_binary
@@ -16,4 +24,5 @@ from attitude.foundations.constants import G
 
 __all__ = ["InertiaIntegrals", "inertia_integrals", "multi_indices", "rotated", "MutualForces",
            "MutualGravity", "BinarySystem", "BinaryState", "Impulse", "BODIES",
-           "propagate_binary", "G"]
+           "propagate_binary", "G", "BinaryDiagnosis", "PeriodChange", "diagnose",
+           "libration_angle", "period_change"]
