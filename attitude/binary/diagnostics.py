@@ -100,6 +100,14 @@ class BinaryDiagnosis:
         ``energy_rel_drift`` and ``angular_momentum_rel_drift``: the largest relative
         change of the total energy and angular momentum, within each stretch between
         impulses.
+
+    Examples
+    --------
+    >>> nan = float("nan")
+    >>> b = BinaryDiagnosis(42917.0, 42950.0, nan, 0.0, 0.05, 48800.0, "librating",
+    ...                     8136.0, 42917.0, 0.0, 0.0, {})
+    >>> b.periods()["libration"], b.secondary_regime
+    (48800.0, 'librating')
     """
 
     orbit_period: float
@@ -130,6 +138,12 @@ class PeriodChange:
     ``before``/``after`` are measured from the separation (sidereal),
     ``osculating_before``/``osculating_after`` from Kepler's third law at the last
     sample before and the first at or after the time; ``change = after - before``.
+
+    Examples
+    --------
+    >>> c = PeriodChange(86400.0, 42917.0, 40937.0, 42950.0, 40970.0)
+    >>> c.change / 60, c.osculating_change / 60          # min
+    (-33.0, -33.0)
     """
 
     time: float
@@ -216,7 +230,7 @@ def _whole_turn_period(theta, rate, t) -> float:
         return math.nan
     crossing = _hermite_root(t[k - 1], t[k], theta[k - 1] - target, theta[k] - target,
                              rate[k - 1], rate[k])
-    return (crossing - t[0]) / turns
+    return float((crossing - t[0]) / turns)
 
 
 def _hermite_root(t0, t1, f0, f1, d0, d1) -> float:
