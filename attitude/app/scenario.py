@@ -37,6 +37,7 @@ from ..foundations.errors import (
 from ..foundations.expectation import Expectation
 from ..foundations.quantities import read_unit
 from ..foundations.spec import Key, Table, json_schema, markdown, validate
+from ..binary.config import is_binary
 from ..inversion.config import is_inversion
 from ..model.body import MassProperties, RigidBody
 from ..model.ephemeris import Ephemeris, relative_drifts
@@ -207,6 +208,10 @@ def load_scenario(path: str | Path) -> Scenario:
     if is_inversion(raw):
         raise ScenarioError("an inversion scenario ([inversion]: lightcurves in, shape and "
                             f"pole out): run it with `attitude invert {path}`", path=path)
+    if is_binary(raw):
+        raise ScenarioError("a binary scenario ([binary]: two bodies and their mutual "
+                            f"orbit): run it with `attitude run {path}` (in Python: "
+                            "attitude.binary.config.load_binary)", path=path)
     doc = validate(raw, SCENARIO, path=str(path), error=ScenarioError)
     meta = doc.get("scenario", {})
     name = meta.get("name", path.stem)

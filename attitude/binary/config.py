@@ -613,8 +613,18 @@ class BinaryRun:
                                     "osculating_after": c.osculating_after}
         if self.note:
             doc["note"] = self.note
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                for k, v in doc.items()}
+        return _finite(doc)
+
+
+def _finite(value):
+    """``value`` with every non-finite float (a period not measured) as None (JSON)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def run_binary(scenario: BinaryScenario, *, output=None, write_outputs: bool = True

@@ -14,9 +14,11 @@ the attributes ``gravitational_constant`` and ``masses``):
 - **osculating period**: Kepler's third law for the energy of the first sample,
   ``a = -mu / (2 E)``, ``E = |V|^2 / 2 - mu / |R|``, ``mu = G (m1 + m2)``; NaN if
   unbound.
-- **apsidal rate**: the least-squares slope of the unwrapped direction of the
-  eccentricity vector in the orbit plane, rad/s; NaN for a near-circular orbit (mean
-  eccentricity below :data:`CIRCULAR_ECCENTRICITY`).
+- **eccentricity**: geometric, ``(r_max - r_min) / (r_max + r_min)`` of the samples
+  (the osculating one of a circular orbit about an oblate primary is not small);
+- **apsidal rate**: the advance of the periapsis (the minima of ``|R|``, refined on a
+  parabola) per unit time, rad/s; NaN for a near-circular orbit (eccentricity below
+  :data:`CIRCULAR_ECCENTRICITY`) or fewer than two passages.
 - **libration angle** (:func:`libration_angle`): in the orbit plane, the angle from the
   direction to the primary (``-R``) to the secondary's long axis (the principal axis of
   its smallest moment), positive about the orbit normal, wrapped to (-90, 90] deg (the
@@ -67,7 +69,7 @@ TUMBLING_ANGLE = math.radians(30.0)
 #: rad: a locked secondary whose rate or largest-moment axis leaves its axis / the orbit
 #: normal by more than this is in a non-principal (roll, pitch) libration.
 PRINCIPAL_ANGLE = math.radians(5.0)
-#: Mean eccentricity below which the apsidal rate is not measured.
+#: Eccentricity below which the apsidal rate is not measured.
 CIRCULAR_ECCENTRICITY = 1e-3
 
 
@@ -84,7 +86,7 @@ class BinaryDiagnosis:
     apsidal_rate : float
         rad/s, precession of the eccentricity vector (NaN: near-circular).
     eccentricity : float
-        Mean osculating eccentricity.
+        Geometric, from the extremes of the sampled separation.
     libration_amplitude : float
         rad, half the peak-to-peak of the libration angle (NaN: it circulates).
     libration_period : float
@@ -453,17 +455,38 @@ def _regime(ds):
     return regime, unwrapped, circulates, spin_angle, tilt
 
 
-def _apsidal(t, R, V, mu) -> tuple[float, float]:
-    """(mean eccentricity, apsidal rate in rad/s or NaN)."""
-    h = np.cross(R, V)
-    e = np.cross(V, h) / mu - R / np.linalg.norm(R, axis=-1, keepdims=True)
-    ecc = float(np.linalg.norm(e, axis=-1).mean())
-    if ecc < CIRCULAR_ECCENTRICITY or t.size < 3:
-        return ecc, math.nan
+def _eccentricity(R) -> float:
+    """Geometric eccentricity ``(r_max - r_min) / (r_max + r_min)`` of the sampled
+    separation."""
+    r = np.linalg.norm(R, axis=-1)
+    return float((r.max() - r.min()) / (r.max() + r.min()))
+
+
+def _apsidal(t, R, V, period) -> float:
+    """The apsidal rate, rad/s, from the periapsis passages: the minima of ``|R|`` (each
+    the least within half an orbit, refined on a parabola through three samples) and the
+    angle of ``R`` there, less a whole turn per passage; NaN for a near-circular orbit or
+    fewer than two passages."""
+    if _eccentricity(R) < CIRCULAR_ECCENTRICITY or t.size < 5 or not math.isfinite(period):
+        return math.nan
     n = _plane_normal(R, V)
     e1, e2 = _plane_basis(R, n)
-    omega = np.unwrap(np.arctan2(e @ e2, e @ e1))
-    return ecc, float(np.polyfit(t - t[0], omega, 1)[0])
+    angle, rate = _in_plane_angle_and_rate(R, V, n, e1, e2)
+    theta = _unwrap(angle, rate, t, 2 * math.pi)
+    r = np.linalg.norm(R, axis=-1)
+    k = np.nonzero((r[1:-1] <= r[:-2]) & (r[1:-1] < r[2:]))[0] + 1
+    k = [i for i in k if r[i] == r[np.abs(t - t[i]) <= period / 2].min()]
+    if len(k) < 2:
+        return math.nan
+    k = np.array(k)
+    curvature = r[k - 1] - 2 * r[k] + r[k + 1]
+    d = 0.5 * (r[k - 1] - r[k + 1]) / curvature                  # in steps, |d| <= 1/2
+    tp = t[k] + d * 0.5 * (t[k + 1] - t[k - 1])
+    thp = theta[k] + d * (theta[k + 1] - theta[k - 1]) / 2 + d**2 * (
+        theta[k + 1] - 2 * theta[k] + theta[k - 1]) / 2
+    turn = 2 * math.pi * np.sign(theta[-1] - theta[0])
+    advance = np.diff(thp) - turn
+    return float(advance.sum() / (tp[-1] - tp[0]))
 
 
 def _drifts(ds, breaks) -> dict:
@@ -499,7 +522,9 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
         Of :func:`attitude.propagate` on a :class:`~attitude.binary.system.BinarySystem`.
     impulses : sequence of float
         Times (s since the epoch) of impulses in the run: the conservation figures are
-        measured within each stretch between them.
+        measured within each stretch between them, and the orbit and the secondary after
+        the last one (the motion the impulses left; :func:`period_change` compares both
+        sides).
 
     Returns
     -------
@@ -534,16 +559,23 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
     eccentricity forces a libration near the free one.
     """
     ds = _binary_dataset(eph)
-    t, R, V = _orbit_arrays(ds)
     mu = _mu(ds)
+    _, R0, V0 = _orbit_arrays(ds, slice(0, 1))
+    conservation = _drifts(ds, impulses)
+    if len(impulses):                    # the motion the last impulse left
+        t = np.asarray(ds["time"].values, dtype=float)
+        after = np.nonzero(t >= max(float(s) for s in impulses))[0]
+        if after.size >= 2:
+            ds = ds.isel(time=after)
+    t, R, V = _orbit_arrays(ds)
     regime, unwrapped, circulates, spin_angle, tilt = _regime(ds)
-    ecc, apsidal = _apsidal(t, R, V, mu)
+    period = _sidereal_period(t, R, V)
     w = np.asarray(ds["angular_velocity"].values, dtype=float)
     return BinaryDiagnosis(
-        orbit_period=_sidereal_period(t, R, V),
-        osculating_period=_kepler_period(R[0], V[0], mu),
-        apsidal_rate=apsidal,
-        eccentricity=ecc,
+        orbit_period=period,
+        osculating_period=_kepler_period(R0[0], V0[0], mu),
+        apsidal_rate=_apsidal(t, R, V, period),
+        eccentricity=_eccentricity(R),
         libration_amplitude=math.nan if circulates else float(np.ptp(unwrapped) / 2),
         libration_period=math.nan if circulates else _zero_crossing_period(t, unwrapped),
         secondary_regime=regime,
@@ -551,7 +583,7 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
         secondary_spin_period=_spin_period(w[1]),
         max_spin_axis_angle=spin_angle,
         max_tilt=tilt,
-        conservation=_drifts(ds, impulses),
+        conservation=conservation,
     )
 
 

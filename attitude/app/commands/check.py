@@ -8,6 +8,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from ...binary.config import is_binary, load_binary, run_binary
 from ...foundations.errors import AttitudeError, PropagationError
 from ...inversion.config import is_inversion, load_inversion, run_inversion
 from ...photometry.config import run_lightcurve  # photometry (issue 15)
@@ -77,6 +78,10 @@ def _run_one(path: str, out: dict) -> None:
         return
     if is_inversion(document):           # issue 27: lightcurves in, shape and pole out
         run = run_inversion(load_inversion(path), write_outputs=False)
+        out["name"], out["expect"] = run.name, [dict(e) for e in run.expect]
+        return
+    if is_binary(document):              # issue 28: the full two-body problem
+        run = run_binary(load_binary(path), write_outputs=False)
         out["name"], out["expect"] = run.name, [dict(e) for e in run.expect]
         return
     result = run_scenario(load_scenario(path), write_outputs=False)

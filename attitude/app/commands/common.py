@@ -45,7 +45,8 @@ def expectation_cells(e: dict) -> tuple[str, str, str, str]:
     unit = f" {e['unit']}" if "unit" in e else ""
     if "tolerance" in e:
         expected, tolerance = f"{number(e['expected'])}{unit}", f"+/- {e['tolerance']:.3g}{unit}"
-    elif e["key"] in ("regime", "resonance"):        # resonance: the spin-orbit wing
+    elif e["key"] in ("regime", "resonance") or isinstance(e["expected"], str):
+        # resonance: the spin-orbit wing; secondary_regime: the binary wing
         expected, tolerance = e["expected"], "exact"
     else:
         expected, tolerance = f"<= {e['expected']:.3g}", "upper bound"

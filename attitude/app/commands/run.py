@@ -10,13 +10,15 @@ import sys
 import threading
 from pathlib import Path
 
+from ...binary.config import is_binary
 from ...foundations.progress import Progress
 from ...model.ephemeris import write_atomically
 from ...propagation.cluster import local_cluster
 from ...propagation.compiled import quiet_compiles
 from ...propagation.events import event_table
 from ..plot import save_figures
-from ..scenario import load_scenario, run_scenario
+from ..scenario import load_scenario, read_scenario_toml, run_scenario
+from .run_binary import run_binary_command
 from .common import (
     EXIT_EXPECTATION,
     EXIT_INPUT,
@@ -284,6 +286,8 @@ def _run(args) -> int:
             print(f"attitude: error: {args.scenario}: --plot needs matplotlib; install it "
                   "with pip install 'attitude-dynamics[plot]'", file=sys.stderr)
             return EXIT_INPUT
+    if is_binary(read_scenario_toml(args.scenario)):      # issue 28: two rigid bodies
+        return run_binary_command(args)
     scenario = load_scenario(args.scenario)
     if args.workers is not None:
         if args.workers < 1:

@@ -1,0 +1,74 @@
+"""``attitude run`` on a binary scenario (``[binary]``, issue 28): propagate both bodies,
+print the orbit, the libration, the regime and the conservation, write the ephemeris and
+the report."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from ...binary.config import load_binary, run_binary
+from ...model.ephemeris import write_atomically
+from .common import EXIT_EXPECTATION, EXIT_INPUT, EXIT_OK, expectation_line, format_seconds
+
+#: Nothing public: ``attitude run`` hands a binary scenario to :func:`run_binary_command`.
+__all__ = []
+
+
+def _period(seconds: float) -> str:
+    return "not measured" if not math.isfinite(seconds) else format_seconds(seconds, 7)
+
+
+def summary_rows(run, scenario) -> list[tuple[str, str]]:
+    """The summary of a binary run as ``(label, value)`` rows."""
+    d, eph = run.diagnosis, run.ephemeris
+    m1, m2 = scenario.system.masses
+    rows = [("Scenario", f"{run.name}  ({scenario.path})"),
+            ("Bodies", f"primary {m1:.6g} kg, secondary {m2:.6g} kg; mutual potential to "
+                       f"order {scenario.system.order}"),
+            ("Run", f"{len(eph)} epochs over {format_seconds(float(scenario.times[-1]))}, "
+                    f"method {run.method}" + (f" ({run.note})" if run.note else ""))]
+    orbit = f"sidereal period {_period(d.orbit_period)} (osculating at the start " \
+            f"{_period(d.osculating_period)}), eccentricity {d.eccentricity:.3g}"
+    if math.isfinite(d.apsidal_rate):
+        orbit += f", apsidal precession {math.degrees(d.apsidal_rate) * 86400:.4g} deg/d"
+    rows.append(("Orbit", orbit))
+    c = run.change
+    if c is not None:
+        rows.append(("Impulse", f"at {format_seconds(c.time)}: period {_period(c.before)} -> "
+                                f"{_period(c.after)}, change {c.change / 60:+.4g} min "
+                                f"(Kepler's osculating: {c.osculating_change / 60:+.4g} min)"))
+    libration = (f"libration amplitude {math.degrees(d.libration_amplitude):.4g} deg, "
+                 f"period {_period(d.libration_period)}"
+                 if math.isfinite(d.libration_amplitude) else "the long axis circulates")
+    rows.append(("Secondary", f"regime {d.secondary_regime}; {libration}; spin period "
+                              f"{_period(d.secondary_spin_period)}"))
+    rows.append(("Primary", f"spin period {_period(d.primary_spin_period)}"))
+    cons = d.conservation
+    rows.append(("Conserved", f"between impulses: max |E - E0|/|E0| = "
+                              f"{cons['energy_rel_drift']:.2g}, max |L - L0|/|L0| = "
+                              f"{cons['angular_momentum_rel_drift']:.2g}"))
+    return rows
+
+
+def run_binary_command(args) -> int:
+    """``attitude run X.toml`` for a binary scenario: summary, ``-o``, ``--report``."""
+    for flag, given in (("--workers", getattr(args, "workers", None) is not None),
+                        ("--plot", getattr(args, "plot", False))):
+        if given:
+            print(f"attitude: error: {args.scenario}: {flag}: not available for a binary "
+                  "scenario", file=sys.stderr)
+            return EXIT_INPUT
+    scenario = load_binary(args.scenario)
+    run = run_binary(scenario, output=args.output)
+    if args.report:
+        text = json.dumps(run.report(), indent=2, default=float)
+        write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(text + "\n"))
+    if not args.quiet:
+        rows = summary_rows(run, scenario)
+        rows += [("Expect", expectation_line(e)) for e in run.expect]
+        rows += [("Wrote", str(p)) for p in run.outputs]
+        print("\n".join(f"{label:<10} {value}" for label, value in rows))
+    return EXIT_OK if run.ok else EXIT_EXPECTATION
