@@ -27,6 +27,7 @@ from ..analysis import statistics
 from ..analysis.classification import classify
 from ..analysis.diagnostics import add_diagnostics
 from ..analysis.spindown import spin_trend
+from ..binary.config import is_binary
 from ..fitting.config import parse_observations
 from ..foundations.errors import (
     AttitudeError,
@@ -37,7 +38,6 @@ from ..foundations.errors import (
 from ..foundations.expectation import Expectation
 from ..foundations.quantities import read_unit
 from ..foundations.spec import Key, Table, json_schema, markdown, validate
-from ..binary.config import is_binary
 from ..inversion.config import is_inversion
 from ..model.body import MassProperties, RigidBody
 from ..model.ephemeris import Ephemeris, relative_drifts

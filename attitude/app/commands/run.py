@@ -18,7 +18,6 @@ from ...propagation.compiled import quiet_compiles
 from ...propagation.events import event_table
 from ..plot import save_figures
 from ..scenario import load_scenario, read_scenario_toml, run_scenario
-from .run_binary import run_binary_command
 from .common import (
     EXIT_EXPECTATION,
     EXIT_INPUT,
@@ -27,6 +26,7 @@ from .common import (
     expectation_line,
     format_seconds,
 )
+from .run_binary import run_binary_command
 
 #: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
 #: is the interface, tested in tests/app/test_cli.py).
