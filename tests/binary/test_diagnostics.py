@@ -74,6 +74,32 @@ def test_two_spheres_orbit_period_is_keplers():
 PHI0 = math.radians(2.0)
 
 
+def test_apsidal_rate_about_an_oblate_primary_is_the_epicycles():
+    """A point secondary in the equatorial plane of a homogeneous oblate spheroid (order 2:
+    its J2 alone, J2 R^2 = (a^2 - c^2) / 5): Phi = -mu/r - mu K / (2 r^3).  For a
+    near-circular orbit the periapsis advances at Omega - kappa, the angular and the
+    epicyclic frequencies at the guiding radius (r^4 Omega^2 = h^2):
+        Omega^2 = Phi'/r,  kappa^2 = 3 Phi'/r + Phi''.
+    Exact to first order in e; the next order is e^2 times a number of order one: the
+    bound 4 e^2 (at e = 0.05, 1 %; the J2 formula 3/2 n J2 (R/p)^2 is 5 % off here)."""
+    primary = att.RigidBody.from_mass_properties(ELLIPSOID(5.2e11, [394.0, 394.0, 290.0]))
+    system = att.BinarySystem(primary, att.RigidBody.from_mass_properties(SPHERE(4.3e9, 80.0)))
+    mu, K, e = system.mu, (394.0**2 - 290.0**2) / 5, 0.05
+    orbit = KeplerOrbit(mu, 1190.0, e=e, mean_anomaly=2.0)
+    eph = att.propagate(system, _kepler_state(system, orbit),
+                        np.linspace(0.0, 3.2 * orbit.period, 300), rtol=1e-10)
+    h = np.linalg.norm(np.cross(orbit.position(0.0), orbit.velocity(0.0)))
+    radii = np.linspace(900.0, 1500.0, 600001)
+    guiding = radii[np.argmin(abs(radii**4 * (mu / radii**3 + 1.5 * mu * K / radii**5)
+                                  - h * h))]
+    omega = math.sqrt(mu / guiding**3 + 1.5 * mu * K / guiding**5)
+    kappa = math.sqrt(mu / guiding**3 - 1.5 * mu * K / guiding**5)
+    b = att.binary.diagnose(eph)
+    assert b.apsidal_rate == pytest.approx(omega - kappa, rel=4 * e**2)
+    # geometric, not osculating: J2 moves r by about K / a, e by K / a^2
+    assert b.eccentricity == pytest.approx(e, abs=K / 1190.0**2)
+
+
 def _locked(R0=2380.0, phi0=PHI0, spin=1.0, tilt=None):
     """Sphere primary, the GUBAS example's Dimorphos-like ellipsoid, order 2, on the
     circular orbit of the mutual force (its speed from the force at the start)."""
