@@ -93,6 +93,9 @@ from attitude.model.orbit import KeplerOrbit
 __all__ = ["BINARY", "EXPECT", "BinaryScenario", "BinaryRun", "is_binary", "load_binary",
            "run_binary", "impact_delta_v"]
 
+#: Longest run, in Keplerian orbits (about a day of DOP853 here).
+MAX_ORBITS = 1e5
+
 #: Methods a ``[binary]`` table may name ("lgvi" runs as "integrator" until it lands).
 METHODS = ("integrator", "lgvi")
 
@@ -316,7 +319,7 @@ def load_binary(path) -> BinaryScenario:
                             "(it has [scenario], [binary] and [expect])", path=str(path),
                             key=unknown[0])
     raw = document["binary"]
-    scale = raw.get("time_scale", "tdb")
+    scale = raw.get("time_scale", "tdb") if isinstance(raw.get("time_scale"), str) else "tdb"
     for item in raw.get("impulse", []) if isinstance(raw.get("impulse"), list) else []:
         if isinstance(item, dict) and "epoch" in item and "time_scale" not in item:
             item["time_scale"] = scale      # an impulse's epoch: in [binary]'s scale
@@ -363,6 +366,14 @@ def load_binary(path) -> BinaryScenario:
         raise _fail(path, "binary.frame" if "frame" in str(err) else "binary",
                     getattr(err, "reason", str(err))) from None
     duration, step = cfg["duration"], cfg["output_step"]
+    energy = 0.5 * velocity @ velocity - system.mu / np.linalg.norm(position)
+    if energy < 0:
+        orbits = duration / (2 * math.pi * math.sqrt((-system.mu / (2 * energy)) ** 3
+                                                     / system.mu))
+        if orbits > MAX_ORBITS:
+            raise _fail(path, "binary.duration", f"{orbits:.3g} orbits is too long for one "
+                                                 f"run (at most {MAX_ORBITS:.0e}); shorten "
+                                                 "it")
     if step > duration:
         raise _fail(path, "binary.output_step", f"the output step ({step:.6g} s) is longer "
                                                 f"than the duration ({duration:.6g} s)")

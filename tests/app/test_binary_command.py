@@ -163,6 +163,7 @@ def test_the_synchronous_start_locks_the_long_axis_on_the_primary(tmp_path):
      "expect.period_change"),
     (('primitive = "sphere"\nmass = 4.3e9\nradius = 80.0\n', ""), "binary.secondary"),
     (('method = "lgvi"', 'method = "rk4"'), "binary.method"),
+    ((f'duration = "{1.6 * PERIOD} s"', 'duration = "1e4 yr"'), "binary.duration"),
     (("[binary.orbit]", '[binary.orbit]\neccentricity = 1.5'), "binary.orbit.eccentricity"),
 ])
 def test_bad_binary_scenarios_exit_2_with_one_line(scenario, capsys, edit, key):
