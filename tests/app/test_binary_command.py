@@ -16,6 +16,7 @@ from attitude.binary.config import impact_delta_v, load_binary
 from attitude.foundations.constants import G
 from attitude.foundations.errors import ScenarioError
 from attitude.model.ephemeris import Ephemeris
+from attitude.model.shape import Polyhedron
 
 M1, M2, A = 5.2e11, 4.3e9, 1190.0
 PERIOD = 2 * math.pi * math.sqrt(A**3 / (G * (M1 + M2)))       # Kepler, s
@@ -180,3 +181,23 @@ def test_bad_binary_scenarios_exit_2_with_one_line(scenario, capsys, edit, key):
 def test_the_dart_scenario_meets_its_expectations(capsys):
     assert main(["check", "scenarios/binary/didymos_dart.toml"]) == 0
     assert "period_change" in capsys.readouterr().out
+
+
+def test_a_shape_model_body(scenario, capsys):
+    """The secondary from an OBJ and its density: its mass is the polyhedron's, its
+    extent the farthest vertex (the overlap check)."""
+    shape = Polyhedron.ellipsoid(0.1, 0.08, 0.06, subdivisions=2)        # km
+    (scenario.parent / "moon.obj").write_text(shape.obj_text())
+    text = TEXT.replace('primitive = "sphere"\nmass = 4.3e9\nradius = 80.0',
+                        'shape = "moon.obj"\nlength_unit = "km"\ndensity = "2 g/cm3"')
+    scenario.write_text(text)
+    sc = load_binary(scenario)
+    assert sc.system.secondary.mass == pytest.approx(2000.0 * shape.volume * 1e9, rel=1e-12)
+    scenario.write_text(text.replace('semi_major_axis = "1190.0 m"',
+                                     'semi_major_axis = "480 m"'))   # 390 + 100 m > 480 m
+    assert main(["run", str(scenario)]) == 2
+    assert "binary.orbit" in capsys.readouterr().err
+    scenario.write_text(text.replace("moon.obj", "missing.obj"))
+    assert main(["run", str(scenario)]) == 2
+    err = capsys.readouterr().err
+    assert "missing.obj" in err and len(err.strip().splitlines()) == 1
