@@ -81,6 +81,12 @@ states, or a table of bodies); --workers N runs it on a dask LocalCluster of N w
 processes (pip install 'attitude-dynamics[dask]'), writing the ephemeris chunk by chunk:
 
   attitude run scenarios/apophis_ensemble.toml --workers 2
+
+A scenario with a [binary] table propagates two bodies that torque each other (the full
+two-body problem) and reports the mutual orbit's period, its change across an impulse,
+the secondary's libration and regime:
+
+  attitude run scenarios/binary/didymos_dart.toml --report dart.json
 """
 
 _MAIN_HELP = """\
