@@ -126,16 +126,21 @@ def _body_table(name: str) -> Table:
         Key("semi_axes", "quantity", unit="m", shape=(3,), positive=True,
             doc="ellipsoid: along the body's x, y, z"),
         Key("radius", "quantity", unit="m", positive=True, doc="sphere"),
+        Key("principal_moments", "quantity", unit="kg m2", shape=(3,), positive=True,
+            doc="a body known by its moments and mass (order 2 only); body frame = "
+                "principal frame"),
         Key("attitude", "table", table=ROTATION, doc="body -> inertial; default identity"),
         Key("spin_period", "quantity", unit="s", positive=True,
             doc="spin about the axis of largest moment"),
         Key("omega", "quantity", unit="rad/s", shape=(3,), doc="body-frame angular velocity"),
-    ), exactly_one=(("shape", "primitive"),), at_most_one=(("spin_period", "omega"),),
+    ), exactly_one=(("shape", "primitive", "principal_moments"),),
+        at_most_one=(("spin_period", "omega"),),
         needs=(("shape", ("density",)), ("primitive", ("mass",)),
+               ("principal_moments", ("mass",)),
                ("density", ("shape",)), ("length_unit", ("shape",))),
         excludes=(("shape", ("mass", "semi_axes", "radius")),),
         doc="A homogeneous body: a shape model and its density, or a primitive and its "
-            "mass.")
+            "mass; or (order 2) principal moments and a mass.")
 
 
 ORBIT = Table("orbit", (
@@ -405,6 +410,9 @@ def _body(path, table: dict, name: str) -> RigidBody:
         if "shape" in table:
             return RigidBody.from_obj(path.parent / table["shape"], density=table["density"],
                                       length_unit=table.get("length_unit", "m"), name=label)
+        if "principal_moments" in table:
+            return RigidBody.from_principal_moments(table["principal_moments"],
+                                                    mass=table["mass"], name=label)
         if table["primitive"] == "sphere":
             if "radius" not in table or "semi_axes" in table:
                 raise _fail(path, f"binary.{name}.radius", "a sphere takes radius (not "
@@ -419,7 +427,7 @@ def _body(path, table: dict, name: str) -> RigidBody:
     except ScenarioError:
         raise
     except AttitudeError as err:
-        key = "shape" if "shape" in table else "primitive"
+        key = next(k for k in ("shape", "principal_moments", "primitive") if k in table)
         raise _fail(getattr(err, "path", None) or path, f"binary.{name}.{key}",
                     getattr(err, "reason", str(err))) from None
 

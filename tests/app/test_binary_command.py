@@ -201,3 +201,15 @@ def test_a_shape_model_body(scenario, capsys):
     assert main(["run", str(scenario)]) == 2
     err = capsys.readouterr().err
     assert "missing.obj" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_body_known_by_its_moments_runs_at_order_2_only(scenario, capsys):
+    text = TEXT.replace('primitive = "sphere"\nmass = 4.3e9\nradius = 80.0',
+                        'principal_moments = [1.0e13, 1.2e13, 1.4e13]\nmass = 4.3e9')
+    scenario.write_text(text)
+    assert load_binary(scenario).system.secondary.principal_moments.tolist() == [
+        1.0e13, 1.2e13, 1.4e13]
+    scenario.write_text(text.replace("order = 2", "order = 3"))
+    assert main(["run", str(scenario)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "binary.order" in err[0]
