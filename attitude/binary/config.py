@@ -393,6 +393,10 @@ def load_binary(path) -> BinaryScenario:
     if "period_change" in expect and not impulses:
         raise _fail(path, "expect.period_change", "needs a [[binary.impulse]]: the change "
                                                   "is measured across the first one")
+    if "period_change" in expect and not 0 < min(i.time for i in impulses) < duration:
+        raise _fail(path, "expect.period_change", "the first impulse is at an end of the "
+                                                  "run: the change needs orbits before and "
+                                                  "after it")
     method, note = cfg["method"], ""
     if method not in AVAILABLE_METHODS:
         note = (f"method {method!r} is not available yet in this version: ran "
@@ -697,7 +701,7 @@ def run_binary(scenario: BinaryScenario, *, output=None, write_outputs: bool = T
     times = [imp.seconds_after(scenario.state.epoch) for imp in scenario.impulses]
     d = diagnose(eph, impulses=times)
     change = None
-    if times:
+    if times and scenario.times[0] < min(times) <= scenario.times[-1]:
         change = period_change(eph, min(times))
     checks = [_check(e, d, change) for e in scenario.expect]
     outputs = []

@@ -164,6 +164,8 @@ def test_the_synchronous_start_locks_the_long_axis_on_the_primary(tmp_path):
      "expect.period_change"),
     (('primitive = "sphere"\nmass = 4.3e9\nradius = 80.0\n', ""), "binary.secondary"),
     (('method = "lgvi"', 'method = "rk4"'), "binary.method"),
+    (("[expect]", '[[binary.impulse]]\ntime = 0.0\ndelta_v = [0, 0, 0]\n[expect]\n'
+                  'period_change = { value = -1, abs_tol = 1 }'), "expect.period_change"),
     ((f'duration = "{1.6 * PERIOD} s"', 'duration = "1e4 yr"'), "binary.duration"),
     (("[binary.orbit]", '[binary.orbit]\neccentricity = 1.5'), "binary.orbit.eccentricity"),
 ])
