@@ -44,7 +44,12 @@ the attributes ``gravitational_constant`` and ``masses``):
   a large libration, are left out of the angle from the axis.)
 - **spin periods**: ``2 pi / mean |w|`` of each body.
 
-:func:`period_change` measures the orbit period before and after a time (an impulse).
+Given the times of impulses, :func:`diagnose` reads the orbit and the secondary after the
+last one (the motion they left) and the conservation figures within each stretch between
+them; :func:`period_change` measures the orbit period before and after a time (an
+impulse).  The angles are unwrapped from sample to sample with the step each rate
+predicts, so the output step may be long against the orbit, not against the change of the
+rates (a tumble's): sample a tumbling secondary finely.
 """
 
 from __future__ import annotations
