@@ -155,6 +155,7 @@ def test_fit_posterior_follows_o_and_labels_units(fit_scenario, tmp_path, capsys
     assert ratio == pytest.approx(inertia[0, 0] / inertia[2, 2], rel=1e-9)
     # progress of the MCMC steps, and emcee's words replaced by one line of ours
     assert "attitude: posterior (MCMC):" in std.err
+    assert "attitude: fit (least squares):" in std.err          # the starts, then the chain
     assert "integrated autocorrelation time" not in std.err
     notes = [ln for ln in std.err.splitlines() if "note" in ln]
     assert len(notes) <= 1 and all(ln.startswith("attitude: note: ") for ln in notes)
