@@ -177,18 +177,28 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
     # --- Poinsot's construction ----------------------------------------------------------
     if inertia is not None:
         moments, axes = np.linalg.eigh(inertia)
-        E, Lm = float(motion.energy[0]), float(motion.momentum[0])
+        E = float(motion.energy[0])
         semi = np.sqrt(2 * E / moments)
         shell = ellipsoid_surface(semi, axes, n_lat=10, n_lon=20)
         ev, etri = mesh_faces(surface_quads(*shell))
+        # under torques E and L change: the energy ellipsoid grows or shrinks with
+        # sqrt(E), the invariable plane follows L and its distance 2E/|L|, frame by frame
+        scale = np.sqrt(np.asarray(motion.energy, float) / E)
+        Lk = np.asarray(motion.angular_momentum, float)
+        varying = bool(np.abs(scale - 1.0).max() > 1e-9 or
+                       np.abs(Lk - Lk[0]).max() > 1e-9 * np.linalg.norm(Lk[0]))
         add(go.Mesh3d(i=etri[:, 0], j=etri[:, 1], k=etri[:, 2], color="#4fc3d9",
                       opacity=0.6, flatshading=True, name="energy ellipsoid",
-                      hoverinfo="skip", **mesh_xyz(0, ev)), 1, 2, lambda k: mesh_xyz(k, ev))
-        Lhat = L[0] / np.linalg.norm(L[0])
-        corners = plane_patch(Lhat, 2 * E / Lm, np.zeros(3), 1.2 * semi.max())
-        add(go.Mesh3d(x=corners[:, 0], y=corners[:, 1], z=corners[:, 2], i=[0, 0],
-                      j=[1, 2], k=[2, 3], color="gray", opacity=0.25,
-                      name="invariable plane", hoverinfo="skip"), 1, 2)
+                      hoverinfo="skip", **mesh_xyz(0, ev)), 1, 2,
+            lambda k: mesh_xyz(k, ev * scale[k]))
+
+        def plane(k):
+            c = plane_patch(Lk[k], 2 * float(motion.energy[k]) / np.linalg.norm(Lk[k]),
+                            np.zeros(3), 1.2 * semi.max())
+            return {"x": c[:, 0], "y": c[:, 1], "z": c[:, 2]}
+        add(go.Mesh3d(i=[0, 0], j=[1, 2], k=[2, 3], color="gray", opacity=0.25,
+                      name="invariable plane", hoverinfo="skip", **plane(0)), 1, 2,
+            plane if varying else None)
         idx = thinned(t.size, MAX_LINE_POINTS)
         full = sample_motion(eph, t[idx], body_index=body_index)
         her = float32(full.omega_inertial)
