@@ -224,7 +224,7 @@ def integrate_lgvi(system: BinarySystem, y0: np.ndarray, t: np.ndarray, step: fl
     Examples
     --------
     Two spheres on a circular orbit: after one period the secondary is back within the
-    method's ``O((n h)^2)`` error:
+    method's error, ``r (n h)^2 (n t / 3 + 1)`` (it lags by ``r (n h)^2 n t / 3``):
 
     >>> import numpy as np, attitude as att
     >>> from attitude.binary.dynamics import pack
@@ -235,7 +235,8 @@ def integrate_lgvi(system: BinarySystem, y0: np.ndarray, t: np.ndarray, step: fl
     ...           [0, 0, 0])
     >>> period = 2 * np.pi * 500.0 / v
     >>> y = integrate_lgvi(system, y0, [0.0, period], period / 400)
-    >>> bool(np.linalg.norm(y[-1, :3] - [500.0, 0, 0]) < 500.0 * (2 * np.pi / 400)**2 * 7)
+    >>> lag = np.linalg.norm(y[-1, :3] - [500.0, 0, 0])
+    >>> bool(lag < 500.0 * (2 * np.pi / 400)**2 * (2 * np.pi / 3 + 1))
     True
     """
     t = np.asarray(t, float)
@@ -245,7 +246,7 @@ def integrate_lgvi(system: BinarySystem, y0: np.ndarray, t: np.ndarray, step: fl
         return out
     mu = system.reduced_mass
     inertia = np.stack([system.primary.inertia, system.secondary.inertia])
-    kicks = sorted(impulses, key=lambda e: e[0])
+    kicks = sorted((e for e in impulses if e[0] <= t[-1]), key=lambda e: e[0])  # later: no effect
     grid = step_grid(np.concatenate([t, [s for s, _ in kicks]]), step)
     sample = np.searchsorted(grid, t)                 # grid node of each output time
     kick_at = np.searchsorted(grid, [s for s, _ in kicks]).tolist()

@@ -233,3 +233,21 @@ def test_rtol_with_lgvi_is_refused(didymos):
     system, y0 = didymos
     with pytest.raises(BinarySystemError, match="^rtol"):
         att.propagate(system, _state(y0), [0.0, 60.0], method="lgvi", rtol=1e-10)
+
+
+def test_impulse_at_the_epoch_and_after_the_last_output(didymos):
+    """A kick at t = 0 shows in the first sample (the state just after it); one after the
+    last output time changes nothing that is sampled (same steps, same numbers)."""
+    system, y0 = didymos
+    state = _state(y0)
+    dv = np.array([1e-3, 0.0, -2e-3])
+    t = [0.0, 300.0]
+    plain = att.propagate(system, state, t, step=30.0).dataset
+    first = att.propagate(system, state, t, step=30.0,
+                          events=[att.Impulse(0.0, delta_v=dv)]).dataset
+    assert np.abs(first.relative_velocity.values[0] - y0[3:6] - dv).max() \
+        <= 4 * EPS * np.linalg.norm(y0[3:6])
+    late = att.propagate(system, state, t, step=30.0,
+                         events=[att.Impulse(301.0, delta_v=dv)]).dataset
+    for name in ("relative_position", "relative_velocity", "quaternion", "angular_velocity"):
+        np.testing.assert_array_equal(late[name].values, plain[name].values)
