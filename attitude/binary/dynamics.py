@@ -158,7 +158,9 @@ def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
     scipy's DOP853; returns ``(len(t), 20)`` with unit quaternions.
 
     ``atol`` per component: ``atol_scale`` times the component's scale (the separation
-    for R, the orbital speed for V, 1 for q, the fastest rate for w).
+    for R, the orbital speed for V, 1 for q, and for each body's rate the largest of its
+    own rate, the other body's, ``|V|/|R|`` and the Keplerian rate ``sqrt(mu/R^3)``: a
+    body at rest keeps a tolerance on the scale of the system's motion, not of zero).
 
     Examples
     --------
@@ -176,10 +178,10 @@ def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
     t = np.asarray(t, float)
     y0 = np.asarray(y0, float)
     R, V, _, w1, _, w2 = unpack(y0)
-    scale = np.concatenate([np.full(3, np.linalg.norm(R)), np.full(3, max(np.linalg.norm(V),
-                                                                          1e-300)),
-                            np.ones(4), np.full(3, max(np.abs(w1).max(), 1e-300)), np.ones(4),
-                            np.full(3, max(np.abs(w2).max(), 1e-300))])
+    r, v = np.linalg.norm(R), np.linalg.norm(V)
+    rate = max(np.abs(w1).max(), np.abs(w2).max(), v / r, np.sqrt(system.mu / r**3))
+    scale = np.concatenate([np.full(3, r), np.full(3, max(v, rate * r)), np.ones(4),
+                            np.full(3, rate), np.ones(4), np.full(3, rate)])
     if t.size == 0:
         return np.empty((0, 20))
     if t[-1] == 0.0:

@@ -255,3 +255,22 @@ def test_angular_momentum_is_exchanged_in_a_close_pair():
     dH, dL = H[-1] - H[0], L_orbit[-1] - L_orbit[0]
     assert np.linalg.norm(dH + dL) <= 2 * bound
     assert np.linalg.norm(dH) > 0.1 * np.linalg.norm(H[0])   # a real exchange
+
+
+def test_a_body_at_rest_under_round_off_torques_does_not_stall_dop853():
+    """A sphere primary at rest feels only round-off torques: its rate tolerance is on
+    the system's scale (the Keplerian rate), so DOP853 runs (it stopped with 'step size
+    less than spacing' when the tolerance was 1e-12 of a zero rate)."""
+    ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e12, 300.0))
+    egg = att.RigidBody.from_mass_properties(
+        att.MassProperties.solid_ellipsoid(4e9, [100.0, 80.0, 60.0]))
+    system = att.BinarySystem(ball, egg)
+    n = np.sqrt(system.mu / 1500.0**3)
+    state = att.BinaryState("2026-12-01", [1500.0, 0, 0], [0, n * 1500.0, 0],
+                            Rotation.identity(), [0, 0, 0], Rotation.identity(),
+                            [0, 0, 1.3 * n])
+    eph = att.propagate(system, state, np.linspace(0.0, 20000.0, 5), method="integrator",
+                        rtol=1e-11)
+    w1 = eph.dataset.angular_velocity.values[0]
+    # a sphere feels no torque: its rate stays at round-off of the torque scale
+    assert np.abs(w1).max() < 1e-12 * n
