@@ -19,6 +19,7 @@ from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude.binary.dynamics import (
+    _tolerance_scale,
     derivatives,
     energy_momentum,
     integrate_dop853,
@@ -40,12 +41,8 @@ def ellipsoid(mass, axes):
 
 def dop853_steps(system, y0, t_end, rtol) -> float:
     """Steps DOP853 takes on this problem with integrate_dop853's settings."""
-    R, V, _, w1, _, w2 = unpack(np.asarray(y0, float))
-    scale = np.concatenate([np.full(3, np.linalg.norm(R)), np.full(3, np.linalg.norm(V)),
-                            np.ones(4), np.full(3, max(np.abs(w1).max(), 1e-300)),
-                            np.ones(4), np.full(3, max(np.abs(w2).max(), 1e-300))])
     sol = solve_ivp(lambda _, y: derivatives(system, y), (0.0, t_end), y0, method="DOP853",
-                    rtol=rtol, atol=1e-12 * scale)
+                    rtol=rtol, atol=1e-12 * _tolerance_scale(system, y0))
     return sol.nfev / 12
 
 
@@ -121,6 +118,35 @@ def test_energy_and_angular_momentum_are_conserved(order):
     # the attitudes stay unit quaternions and the spins really change (torques act)
     np.testing.assert_allclose(np.linalg.norm(y[:, 6:10], axis=1), 1.0, rtol=0, atol=4 * EPS)
     assert np.abs(y[-1, 17:20] - y0[17:20]).max() > 1e3 * rtol * n
+
+
+def test_bodies_that_do_not_spin_at_first_integrate_like_spinning_ones():
+    """Regression: the absolute tolerance of a body's rate was a fraction of its initial
+    rate, so a body at rest in rotation got none: DOP853 failed ("required step size
+    is less than spacing between numbers") for a secondary at rest, and took 11 times
+    the steps for a primary at rest.  Now either takes about the steps of a spinning
+    pair (within a factor 2: the same orbit sets the step) and conserves E and L."""
+    system = att.BinarySystem(ellipsoid(5.2e11, [425.0, 410.0, 390.0]),
+                              ellipsoid(4.3e9, [103.16, 79.35, 66.13]), order=2)
+    n = np.sqrt(system.mu / 1190.0**3)
+    q2 = Rotation.from_euler("z", 0.4).as_quat()
+    t_end, rtol = 4 * 3600.0, 1e-12
+
+    def start(w1, w2):
+        return pack([1190.0, 0, 0], [0, n * 1190.0, 0], [0, 0, 0, 1.0], w1, q2, w2)
+
+    spinning = dop853_steps(system, start([0, 0, 7.7e-4], [0, 0, n]), t_end, rtol)
+    for w1, w2 in (([0, 0, 0], [0, 0, 0]), ([0, 0, 7.7e-4], [0, 0, 0]),
+                   ([0, 0, 0], [0, 0, n])):
+        y0 = start(w1, w2)
+        steps = dop853_steps(system, y0, t_end, rtol)
+        assert steps <= 2 * spinning, (w1, w2, steps, spinning)
+        y = integrate_dop853(system, y0, [0.0, t_end], rtol=rtol)
+        E, L = energy_momentum(system, y)
+        E_scale, L_scale = conservation_scales(system, y0)
+        assert abs(E[1] - E[0]) <= steps * rtol * E_scale
+        assert np.abs(L[1] - L[0]).max() <= steps * rtol * L_scale
+        assert abs(y[1, 19]) > 1e-3 * n           # the secondary's torque turned it
 
 
 # --- a synchronous secondary: libration --------------------------------------------------
