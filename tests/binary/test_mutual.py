@@ -381,3 +381,32 @@ def test_cube_degree_4_by_hand():
     # = -7/60, over 8: U_4 = +7 G m M / (480 R^5)
     assert abs(t[4] - 7.0 / (480 * 5.0**5)) <= tol
     assert abs(t[3]) <= tol                        # the cube is centrally symmetric
+
+
+# --- bad input ----------------------------------------------------------------------
+
+@pytest.mark.parametrize("field, kwargs", [
+    ("order", dict(order=-1)), ("order", dict(order=2.0)), ("order", dict(order=True)),
+    ("order", dict(order="4")), ("G", dict(order=2, G=-1.0)), ("G", dict(order=2, G=0.0)),
+    ("G", dict(order=2, G=float("nan"))), ("G", dict(order=2, G="6.7e-11")),
+])
+def test_mutual_gravity_rejects_a_bad_order_or_g(field, kwargs):
+    """An order of -1 used to give a potential of exactly 0 without a word."""
+    with pytest.raises(att.BinarySystemError) as err:
+        MutualGravity(**kwargs)
+    assert str(err.value).startswith(field)
+
+
+def test_integrals_below_the_order_are_named():
+    """They used to raise IndexError from inside the series."""
+    T4 = inertia_integrals(ellipsoid(1.0, [3.0, 2.0, 1.0]), 4)
+    T2 = inertia_integrals(ellipsoid(1.0, [3.0, 2.0, 1.0]), 2)
+    with pytest.raises(att.BinarySystemError, match="^secondary: .*order 4"):
+        MutualGravity(4).forces([10.0, 0, 0], T4, T2)
+    with pytest.raises(att.BinarySystemError, match="^primary: .*order 4"):
+        MutualGravity(4).terms([10.0, 0, 0], T2, T4)
+    # more than enough is fine: order 2 of order-4 integrals is order 2
+    a = MutualGravity(2).forces([10.0, 0, 0], T4, T4)
+    b = MutualGravity(2).forces([10.0, 0, 0], T2, T2)
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
