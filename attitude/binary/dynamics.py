@@ -103,7 +103,8 @@ def derivatives(system: BinarySystem, y: np.ndarray) -> np.ndarray:
     >>> bool(np.isclose(d[3], -att.binary.G * 2e9 / 500.0**2, rtol=1e-14))  # -G M / R^2
     True
     """
-    R, V, q1, w1, q2, w2 = unpack(np.asarray(y, float))
+    y = np.asarray(y, float)
+    R, V, q1, w1, q2, w2 = unpack(y)
     A1, A2 = matrix(q1), matrix(q2)
     f = mutual_forces(system, R, A1, A2)
     out = np.empty(np.shape(y))

@@ -285,3 +285,11 @@ def test_derivatives_of_a_batch_equal_single_states():
         # over a batch: a few ulps of each part's scale
         for a, b in zip(unpack(d), unpack(one)):
             np.testing.assert_allclose(a, b, rtol=0, atol=64 * EPS * np.abs(b).max())
+
+
+def test_derivatives_of_a_list_equal_those_of_an_array():
+    """A state given as a list (it used to fail: part of the code indexed the input)."""
+    system = att.BinarySystem(sphere(1e9, 50.0), ellipsoid(1e8, [30.0, 20.0, 10.0]))
+    y = pack([500.0, 0, 0], [0, 0.01, 0], [0, 0, 0, 1.0], [0, 0, 1e-4],
+             Rotation.from_euler("z", 0.3).as_quat(), [0, 0, 1e-4])
+    np.testing.assert_array_equal(derivatives(system, y.tolist()), derivatives(system, y))
