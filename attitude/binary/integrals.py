@@ -265,18 +265,17 @@ def rotated(integrals: InertiaIntegrals, matrix: np.ndarray) -> InertiaIntegrals
     array([0.2, 5. ])
     """
     matrix = np.asarray(matrix, float)
-    batch = matrix.shape[:-2]
+    batch = np.broadcast_shapes(matrix.shape[:-2], *(t.shape[:-1] for t in integrals.degrees))
     out = []
     for k, t in enumerate(integrals.degrees):
         if k < 2:
             out.append(np.broadcast_to(t, batch + t.shape[-1:]).copy())
             continue
         full, first = _tensor_maps(k)
-        tensor = t[..., full].reshape(t.shape[:-1] + (3,) * k)
-        tensor = np.broadcast_to(tensor, batch + (3,) * k)
-        rot = matrix.reshape(batch + (1,) * (k - 1) + (3, 3))
-        for _ in range(k):   # turn the last index, then bring it to the front
-            tensor = np.moveaxis(np.matmul(tensor[..., None, :], np.swapaxes(rot, -1, -2)
-                                           )[..., 0, :], -1, len(batch))
-        out.append(tensor.reshape(batch + (3**k,))[..., first])
+        tensor = t[..., full]                                   # (..., 3^k), C order
+        for _ in range(k):   # turn the first index and move it last: k passes, all turned
+            tensor = np.einsum("...ij,...jr->...ri", matrix,
+                               tensor.reshape(tensor.shape[:-1] + (3, 3 ** (k - 1))))
+            tensor = tensor.reshape(tensor.shape[:-2] + (3**k,))
+        out.append(np.broadcast_to(tensor, batch + (3**k,))[..., first].copy())
     return InertiaIntegrals(tuple(out))
