@@ -125,7 +125,10 @@ def test_two_ellipsoids_series_converges_to_the_double_quadrature():
         errors.append(abs(U - exact))
     assert errors[1::2] == errors[0::2][:4]         # odd degrees add exactly nothing
     even = errors[0::2]
-    assert all(b < a / 10 for a, b in zip(even, even[1:])), even
+    # each even order gains ~ (R/rho)^2 = 18.6; at least half of it (measured 330, 15,
+    # 42: the gain varies with how the degrees' angular parts happen to align)
+    gain = (Rn / rho) ** 2 / 2
+    assert all(b < a / gain for a, b in zip(even, even[1:])), even
     # order 8 within 1e-10 of the quadrature: the tail's leading (degree 10) term is
     # below G m1 m2 <|d|^10> / R^11, itself < 3e-9 relative at these sizes; measured
     # 2.6e-11 (the Legendre bound above, 2.5e-6, is the rigorous worst case)
