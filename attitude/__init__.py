@@ -13,7 +13,8 @@ The package is laid out in layers (docs/architecture.md): ``attitude.foundations
 ``attitude.model`` (bodies, shapes, states, orbits, torques, ephemerides, populations),
 ``attitude.propagation``, ``attitude.analysis`` (diagnostics, classification, Lyapunov
 exponents, statistics), the wings (``formats``, ``photometry``, ``fitting``,
-``environment``, ``spinorbit``, ``inversion``, ``pictures``, ``binary``) and ``attitude.app`` (scenario files, the CLI, plots).
+``environment``, ``spinorbit``, ``inversion``, ``pictures``, ``binary``) and
+``attitude.app`` (scenario files, the CLI, plots).
 
 The public names are in ``__all__``; each is imported on first use, so that
 ``import attitude`` (and ``attitude --help``) loads no more than the exceptions.

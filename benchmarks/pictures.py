@@ -4,10 +4,14 @@ Run from the repository root (needs the pictures extra: pip install
 'attitude-dynamics[pictures]')::
 
     python benchmarks/pictures.py --gifs       # docs/figures/poinsot_{sam,lam,near_separatrix}.gif
+                                               # and docs/figures/{apophis,hyperion}.gif
     python benchmarks/pictures.py --timings    # 30-day Apophis -> 20 s MP4, 10^4-epoch HTML
 
 The GIFs are the Poinsot construction for the three regimes of one triaxial body (the
-moments of Apophis, 0.61 : 0.965 : 1), each under 1 MB.  The timings print the wall
+moments of Apophis, 0.61 : 0.965 : 1), each under 1 MB, and two real bodies from their
+scenario files: Apophis's tumbling state (scenarios/apophis.toml, torque-free, its shape
+the ellipsoid of its moments) and Hyperion tumbling chaotically under Saturn's gravity
+gradient (scenarios/hyperion.toml: E and L change, and the construction follows them).  The timings print the wall
 time of ``Ephemeris.animate`` on the 30-day run of scenarios/apophis.toml to a 20 s MP4
 (20 frames/s) and the size of the HTML view of a 10^4-epoch ephemeris.
 """
@@ -51,6 +55,29 @@ def gifs(out: Path = OUT) -> None:
               + f"; {path.stat().st_size / 1e6:.2f} MB in {time.perf_counter() - start:.1f} s")
 
 
+#: scenario -> (GIF name, days shown): a month of Apophis (its 27.4 h precession), and a
+#: stretch of Hyperion's chaotic tumbling (21 d orbit).
+SCENARIO_GIFS = {"apophis.toml": ("apophis", 30.0), "hyperion.toml": ("hyperion", 60.0)}
+
+
+def scenario_gifs(out: Path = OUT) -> None:
+    from attitude.app.cli import main
+
+    with tempfile.TemporaryDirectory() as folder:
+        for scenario, (name, days) in SCENARIO_GIFS.items():
+            eph_path = Path(folder) / f"{name}.nc"
+            main(["run", str(ROOT / "scenarios" / scenario), "-o", str(eph_path), "--quiet"])
+            eph = att.Ephemeris.from_netcdf(eph_path)
+            t = np.asarray(eph.time, dtype=float)
+            keep = t <= days * 86400.0
+            eph = att.Ephemeris(eph.dataset.isel(time=np.flatnonzero(keep)))
+            path = out / f"{name}.gif"
+            start = time.perf_counter()
+            eph.animate(path, fps=10, duration=8.0, dpi=54, figsize=(9.0, 3.4))
+            print(f"{path.relative_to(ROOT)}: {days:g} days of {scenario}; "
+                  f"{path.stat().st_size / 1e6:.2f} MB in {time.perf_counter() - start:.1f} s")
+
+
 def timings() -> None:
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
@@ -83,6 +110,7 @@ def main(argv=None) -> None:
         parser.error("give --gifs, --timings or both")
     if args.gifs:
         gifs()
+        scenario_gifs()
     if args.timings:
         timings()
 

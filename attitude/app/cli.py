@@ -340,6 +340,9 @@ def build_parser() -> argparse.ArgumentParser:
                       "SC_BODY_1)")
     conv.add_argument("--attitude-type", help="AEM ATTITUDE_TYPE (default QUATERNION/ANGVEL;"
                       " also QUATERNION, EULER_ANGLE, ...)")
+    conv.add_argument("--body", metavar="NAME|I", help="one body of a batch or binary file "
+                      "(an AEM or a CK holds one): its name, such as 'secondary' of a "
+                      "binary system, or its index")
     ck = conv.add_argument_group("reading a SPICE C-kernel (IN.bc)")
     ck.add_argument("--sclk", metavar="FILE.tsc",
                     help="SCLK kernel of the CK's clock (default: IN's stem + .tsc)")

@@ -122,6 +122,10 @@ class Scenario:
     photometry: Any = None
     """The parsed ``[photometry]`` table (:class:`attitude.photometry.config.PhotometryConfig`),
     used by ``attitude lightcurve``."""
+    shape_model: tuple | None = None
+    """``(absolute path of the body's OBJ file, its length unit)`` when ``[body]`` names a
+    shape: written into the ephemeris (attributes ``shape_model``, ``shape_length_unit``)
+    so that ``attitude animate`` and ``attitude view`` draw the shape."""
 
     @property
     def times(self) -> np.ndarray:
@@ -277,7 +281,10 @@ def load_scenario(path: str | Path) -> Scenario:
                     integrator_step=integrator_step, order=order, torques=tuple(torques),
                     netcdf=(path.parent / netcdf) if netcdf else None, expect=expect,
                     ensemble=ensemble, chunk=chunk, events=events, section=section,
-                    photometry=photometry, observations=observations)
+                    photometry=photometry, observations=observations,
+                    shape_model=((str((path.parent / body_table["shape"]).resolve()),
+                                  str(body_table.get("length_unit", "m")))
+                                 if ensemble is None and "shape" in body_table else None))
 
 
 def _ensemble(r: _Reader, doc: dict, folder: Path):
@@ -596,6 +603,9 @@ def run_scenario(scenario: Scenario, *, netcdf: str | Path | None = None,
                     rtol=scenario.rtol, torques=torques, step=scenario.integrator_step,
                     order=scenario.order, progress=progress,
                     events=list(scenario.events) or None)
+    if scenario.shape_model is not None:          # the pictures draw the shape (issue 29)
+        eph = Ephemeris(eph.dataset.assign_attrs(shape_model=scenario.shape_model[0],
+                                                 shape_length_unit=scenario.shape_model[1]))
     diagnosis = diagnose(scenario.body, scenario.state)
     classification, note = None, ""
     if torques:

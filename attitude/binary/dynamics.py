@@ -103,7 +103,8 @@ def derivatives(system: BinarySystem, y: np.ndarray) -> np.ndarray:
     >>> bool(np.isclose(d[3], -att.binary.G * 2e9 / 500.0**2, rtol=1e-14))  # -G M / R^2
     True
     """
-    R, V, q1, w1, q2, w2 = unpack(np.asarray(y, float))
+    y = np.asarray(y, float)
+    R, V, q1, w1, q2, w2 = unpack(y)
     A1, A2 = matrix(q1), matrix(q2)
     f = mutual_forces(system, R, A1, A2)
     out = np.empty(np.shape(y))
@@ -152,13 +153,26 @@ def energy_momentum(system: BinarySystem, y: np.ndarray) -> tuple[np.ndarray, np
     return E, L
 
 
+def _tolerance_scale(system: BinarySystem, y0: np.ndarray) -> np.ndarray:
+    """The scale of each state component (20,) that ``atol`` is a fraction of."""
+    R, V, _, w1, _, w2 = unpack(y0)
+    r = np.linalg.norm(R)
+    rate = np.sqrt(system.mu / r**3)            # the mutual orbit's own rate, rad/s
+    return np.concatenate([np.full(3, r), np.full(3, max(np.linalg.norm(V), rate * r)),
+                           np.ones(4), np.full(3, max(np.abs(w1).max(), rate)), np.ones(4),
+                           np.full(3, max(np.abs(w2).max(), rate))])
+
+
 def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
                      rtol: float = 1e-12, atol_scale: float = 1e-12) -> np.ndarray:
     """Integrate one system from ``y0`` (at time 0) to the sorted times ``t >= 0`` with
     scipy's DOP853; returns ``(len(t), 20)`` with unit quaternions.
 
     ``atol`` per component: ``atol_scale`` times the component's scale (the separation
-    for R, the orbital speed for V, 1 for q, the fastest rate for w).
+    for R, the orbital speed for V, 1 for q, each body's fastest rate for its w), the
+    speed and rate never below the system's own, ``sqrt(mu / R)`` and ``sqrt(mu / R^3)``
+    (a body that does not spin at first would otherwise get no absolute tolerance at
+    all, and DOP853 steps that crawl or fail as its torques set it turning).
 
     Examples
     --------
@@ -175,11 +189,7 @@ def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
     """
     t = np.asarray(t, float)
     y0 = np.asarray(y0, float)
-    R, V, _, w1, _, w2 = unpack(y0)
-    scale = np.concatenate([np.full(3, np.linalg.norm(R)), np.full(3, max(np.linalg.norm(V),
-                                                                          1e-300)),
-                            np.ones(4), np.full(3, max(np.abs(w1).max(), 1e-300)), np.ones(4),
-                            np.full(3, max(np.abs(w2).max(), 1e-300))])
+    scale = _tolerance_scale(system, y0)
     if t.size == 0:
         return np.empty((0, 20))
     if t[-1] == 0.0:

@@ -207,18 +207,39 @@ def _polyhedron(vertices: np.ndarray, faces: np.ndarray, mass: float, order: int
     edges = tri - centroid                                   # (f, 3, 3): corners - G
     volume6 = np.einsum("fi,fi->f", edges[:, 0], np.cross(edges[:, 1], edges[:, 2]))
     points, weights = _simplex_rule(max(order, 1))
-    r = np.einsum("qj,fjk->fqk", points, edges)              # (f, q, 3) from the centroid
-    w = volume6[:, None] * weights[None, :]                  # (f, q): 6 V * weight
+    r = np.einsum("qj,fjk->fqk", points, edges).reshape(-1, 3)   # (f q, 3) from the centroid
+    w = (volume6[:, None] * weights[None, :]).ravel()            # (f q,): 6 V * weight
     density = mass / (volume6.sum() / 6.0)
+    moments = _power_moments(r, w, order)
     out = []
     for k in range(order + 1):
-        idx = multi_indices(k)
-        mono = np.prod(r[:, :, None, :] ** idx[None, None, :, :], axis=-1)   # (f, q, n_k)
-        out.append(density * np.einsum("fq,fqn->n", w, mono))
+        a, b, c = multi_indices(k).T
+        out.append(density * moments[a, b, c])
     out[0] = np.array([mass])
     if order >= 1:
         out[1] = np.zeros(3)            # about the centre of mass (round-off dropped)
     return tuple(out)
+
+
+def _power_moments(r: np.ndarray, w: np.ndarray, order: int, chunk: int = 1 << 15
+                   ) -> np.ndarray:
+    """``M[a, b, c] = sum_n w_n x_n^a y_n^b z_n^c`` for ``a, b, c <= order`` (``a + b``
+    at most ``order``): the powers of each coordinate by repeated products, the sums
+    over a chunk of points (a few MB at a time) by ``einsum`` (numpy's own loops: a
+    BLAS product here spins threads on a loaded machine for no gain)."""
+    p = order + 1
+    out = np.zeros((p, p, p))
+    for start in range(0, len(r), chunk):
+        x, y, z = r[start:start + chunk].T
+        px, py, pz = (np.empty((p, len(x))) for _ in range(3))
+        px[0], py[0], pz[0] = w[start:start + chunk], 1.0, 1.0
+        for e in range(1, p):
+            np.multiply(px[e - 1], x, out=px[e])
+            np.multiply(py[e - 1], y, out=py[e])
+            np.multiply(pz[e - 1], z, out=pz[e])
+        for a in range(p):
+            out[a, :p - a] += np.einsum("bn,cn->bc", px[a] * py[:p - a], pz)
+    return out
 
 
 def _signed_centroid(tri: np.ndarray) -> np.ndarray:
@@ -244,18 +265,17 @@ def rotated(integrals: InertiaIntegrals, matrix: np.ndarray) -> InertiaIntegrals
     array([0.2, 5. ])
     """
     matrix = np.asarray(matrix, float)
-    batch = matrix.shape[:-2]
+    batch = np.broadcast_shapes(matrix.shape[:-2], *(t.shape[:-1] for t in integrals.degrees))
     out = []
     for k, t in enumerate(integrals.degrees):
         if k < 2:
             out.append(np.broadcast_to(t, batch + t.shape[-1:]).copy())
             continue
         full, first = _tensor_maps(k)
-        tensor = t[..., full].reshape(t.shape[:-1] + (3,) * k)
-        tensor = np.broadcast_to(tensor, batch + (3,) * k)
-        rot = matrix.reshape(batch + (1,) * (k - 1) + (3, 3))
-        for _ in range(k):   # turn the last index, then bring it to the front
-            tensor = np.moveaxis(np.matmul(tensor[..., None, :], np.swapaxes(rot, -1, -2)
-                                           )[..., 0, :], -1, len(batch))
-        out.append(tensor.reshape(batch + (3**k,))[..., first])
+        tensor = t[..., full]                                   # (..., 3^k), C order
+        for _ in range(k):   # turn the first index and move it last: k passes, all turned
+            tensor = np.einsum("...ij,...jr->...ri", matrix,
+                               tensor.reshape(tensor.shape[:-1] + (3, 3 ** (k - 1))))
+            tensor = tensor.reshape(tensor.shape[:-2] + (3**k,))
+        out.append(np.broadcast_to(tensor, batch + (3**k,))[..., first].copy())
     return InertiaIntegrals(tuple(out))

@@ -35,6 +35,7 @@ import numpy as np
 
 from attitude.binary.integrals import InertiaIntegrals, multi_indices, position
 from attitude.foundations.constants import G as GRAVITATIONAL_CONSTANT
+from attitude.foundations.errors import BinarySystemError
 
 __all__ = ["MutualGravity", "MutualForces"]
 
@@ -148,6 +149,12 @@ class MutualGravity:
     G : float
         Gravitational constant, m^3 kg^-1 s^-2.
 
+    Raises
+    ------
+    BinarySystemError
+        An order that is not an integer >= 0, a G that is not finite and positive, or
+        (by :meth:`forces` and :meth:`terms`) integrals of a lower order than asked.
+
     Examples
     --------
     Two spheres attract as point masses at every order:
@@ -164,6 +171,25 @@ class MutualGravity:
 
     order: int
     G: float = GRAVITATIONAL_CONSTANT
+
+    def __post_init__(self):
+        if isinstance(self.order, bool) or not isinstance(self.order, (int, np.integer)) \
+                or self.order < 0:
+            raise BinarySystemError(f"order: expected an integer >= 0, got {self.order!r}")
+        if isinstance(self.G, bool) or not isinstance(self.G, (int, float, np.floating,
+                                                                np.integer)) \
+                or not (math.isfinite(self.G) and self.G > 0):
+            raise BinarySystemError(f"G: expected a finite positive number (m^3 kg^-1 "
+                                    f"s^-2), got {self.G!r}")
+
+    def _check(self, primary: InertiaIntegrals, secondary: InertiaIntegrals) -> None:
+        for name, T in (("primary", primary), ("secondary", secondary)):
+            if not isinstance(T, InertiaIntegrals) or T.order < self.order:
+                have = T.order if isinstance(T, InertiaIntegrals) else type(T).__name__
+                raise BinarySystemError(
+                    f"{name}: the mutual potential to order {self.order} needs the body's "
+                    f"inertia integrals to order {self.order} (inertia_integrals(body, "
+                    f"{self.order})), got {have}")
 
     def _inverse_distance(self, R: np.ndarray) -> list:
         """``D_gamma(R)`` for every degree 0..order+1, each ``(..., n_degree)``."""
@@ -194,6 +220,7 @@ class MutualGravity:
             Each body's integrals **in the inertial frame**
             (:func:`attitude.binary.integrals.rotated`), to at least ``order``.
         """
+        self._check(primary, secondary)
         R = np.asarray(R, float)
         D = self._inverse_distance(R)
         T1, T2 = primary.degrees, secondary.degrees
@@ -231,6 +258,7 @@ class MutualGravity:
         >>> bool(abs(t[4] / t.sum()) < abs(t[2] / t.sum()) < 1e-2)   # converging
         True
         """
+        self._check(primary, secondary)
         R = np.asarray(R, float)
         D = self._inverse_distance(R)
         out = np.zeros((self.order + 1,) + R.shape[:-1])

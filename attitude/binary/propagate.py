@@ -15,16 +15,18 @@ import numpy as np
 import xarray as xr
 
 from attitude.binary.dynamics import energy_momentum, integrate_dop853, pack, unpack
+from attitude.binary.lgvi import default_step, integrate_lgvi
 from attitude.binary.system import BODIES, BinaryState, BinarySystem, Impulse
 from attitude.foundations import quaternion as quat
 from attitude.foundations.errors import BinarySystemError
+from attitude.foundations.quantities import to_si
 from attitude.model.ephemeris import Ephemeris
 from attitude.propagation.propagator import elapsed_seconds
 
 __all__ = ["propagate_binary", "METHODS", "apply_impulse", "initial_vector"]
 
-#: Methods of :func:`propagate_binary`.
-METHODS = ("integrator",)
+#: Methods of :func:`propagate_binary` (the first is the default).
+METHODS = ("lgvi", "integrator")
 
 
 def initial_vector(state: BinaryState) -> np.ndarray:
@@ -82,11 +84,19 @@ def propagate_binary(system: BinarySystem, state: BinaryState, times, *,
     system : BinarySystem
     state : BinaryState
     times : array-like (s since ``state.epoch``), Quantity, or astropy Time array
-    method : {"integrator"}, optional
-        ``"integrator"``: DOP853 at ``rtol`` (default 1e-12).
+    method : {"lgvi", "integrator"}, optional
+        ``"lgvi"`` (the default; ``"integrator"`` when only ``rtol`` is given): the
+        Lie-group variational integrator (:mod:`attitude.binary.lgvi`) at fixed steps,
+        second order, total angular momentum kept to round-off, energy error bounded
+        (``O(h^2)``, no drift).  ``"integrator"``: DOP853 at ``rtol`` (default 1e-12).
     rtol : float, optional
-    step : float or Quantity, optional
-        Not used by ``"integrator"``.
+        Of ``"integrator"`` only.
+    step : float (s), time Quantity or str (``"30 s"``), optional
+        Longest step of ``"lgvi"``; default 1/200 of the shortest of the osculating
+        orbit period and both spin periods (:func:`attitude.binary.lgvi.default_step`).
+        Between consecutive output and impulse times the steps are equal and no longer
+        than ``step`` (an output or impulse time inside a step shortens the steps of its
+        interval).  Not used by ``"integrator"``.
     events : sequence of :class:`~attitude.binary.system.Impulse`, optional
         Impulses applied at their times (the ephemeris holds the state just after an
         impulse at a sample time).
@@ -124,10 +134,14 @@ def propagate_binary(system: BinarySystem, state: BinaryState, times, *,
     if not isinstance(state, BinaryState):
         raise BinarySystemError(f"state: a BinarySystem propagates a BinaryState, got "
                                 f"{type(state).__name__}")
-    method = "integrator" if method is None else method
+    if method is None:
+        method = "integrator" if rtol is not None and step is None else METHODS[0]
     if method not in METHODS:
         raise BinarySystemError(f"method: expected one of {', '.join(METHODS)} for a binary "
                                 f"system, got {method!r}")
+    if method == "lgvi" and rtol is not None:
+        raise BinarySystemError("rtol: method='lgvi' runs at a fixed step; give step= "
+                                "(or method='integrator' with rtol=)")
     t = np.atleast_1d(np.asarray(elapsed_seconds(times, state.epoch), dtype=float))
     if t.ndim != 1 or not np.all(np.isfinite(t)) or np.any(t < 0) or np.any(np.diff(t) < 0):
         raise BinarySystemError("times: a binary propagates forward: give sorted times >= 0 "
@@ -137,8 +151,19 @@ def propagate_binary(system: BinarySystem, state: BinaryState, times, *,
         if s < 0:
             raise BinarySystemError("events: an impulse before the state's epoch; the "
                                     "propagation runs forward")
-    y = _integrate(system, initial_vector(state), t, impulses, rtol)
+    y0 = initial_vector(state)
+    if method == "lgvi":
+        h = _step_seconds(step) if step is not None else default_step(system, y0)
+        y = integrate_lgvi(system, y0, t, h, impulses)
+        return binary_ephemeris(system, state, t, y, method=method, step=h)
+    y = _integrate(system, y0, t, impulses, rtol)
     return binary_ephemeris(system, state, t, y, method=method)
+
+
+def _step_seconds(step) -> float:
+    """The LGVI's longest step in seconds (float s, time Quantity or ``"30 s"``)."""
+    h = to_si(step, "s", key="step", shape=(), positive=True, error=BinarySystemError)
+    return float(h)
 
 
 def _impulses(events, epoch) -> list[tuple[float, Impulse]]:
@@ -169,8 +194,9 @@ def _integrate(system, y0, t, impulses, rtol) -> np.ndarray:
 
 
 def binary_ephemeris(system: BinarySystem, state: BinaryState, t: np.ndarray, y: np.ndarray,
-                     *, method: str) -> Ephemeris:
-    """The ephemeris of a binary from its state vectors ``(T, 20)`` at times ``t``.
+                     *, method: str, step: float | None = None) -> Ephemeris:
+    """The ephemeris of a binary from its state vectors ``(T, 20)`` at times ``t``
+    (``step``: the LGVI's longest step, s, kept as the attribute ``step``).
 
     Examples
     --------
@@ -196,7 +222,7 @@ def binary_ephemeris(system: BinarySystem, state: BinaryState, t: np.ndarray, y:
         source=f"attitude.propagate, binary system, method={method}",
         extra_attrs={"system": "binary", "method": method, "mutual_potential_order":
                      system.order, "gravitational_constant": system.G,
-                     "masses": system.masses})
+                     "masses": system.masses, **({} if step is None else {"step": step})})
     ds = eph.dataset.assign_coords(body=("body", list(BODIES), {"long_name": "body"}))
     ds["relative_position"] = (("time", "axis"), R, {
         "long_name": "secondary's centre of mass relative to the primary's, inertial frame",

@@ -21,7 +21,7 @@ from attitude.binary.integrals import InertiaIntegrals, inertia_integrals
 from attitude.binary.mutual import MutualGravity
 from attitude.foundations.constants import G as GRAVITATIONAL_CONSTANT
 from attitude.foundations.errors import BinarySystemError
-from attitude.foundations.quantities import to_si
+from attitude.foundations.quantities import DEFAULT_TIME_SCALE, to_si, to_time
 from attitude.model.body import RigidBody
 from attitude.model.state import as_epoch, as_omega, check_frame
 
@@ -78,7 +78,8 @@ class BinarySystem:
             if not isinstance(getattr(self, name), RigidBody):
                 raise BinarySystemError(f"{name}: expected a RigidBody, got "
                                         f"{type(getattr(self, name)).__name__}")
-        G = to_si(self.G, "m3 / (kg s2)", name="G", positive=True, error=BinarySystemError)
+        G = to_si(self.G, "m3 / (kg s2)", name="G", shape=(), positive=True,
+                  error=BinarySystemError)
         object.__setattr__(self, "G", float(G))
         integrals = tuple(inertia_integrals(getattr(self, name), self.order, name=name)
                           for name in BODIES)
@@ -210,9 +211,10 @@ class Impulse:
     angular_impulse: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
-        if self.body not in BODIES:
+        if not isinstance(self.body, str) or self.body not in BODIES:
             raise BinarySystemError(f"body: expected 'primary' or 'secondary', got "
                                     f"{self.body!r}")
+        object.__setattr__(self, "time", _impulse_time(self.time))
         for key, unit in (("delta_v", "m/s"), ("angular_impulse", "kg m2 / s")):
             v = np.array(to_si(getattr(self, key), unit, name=key, error=BinarySystemError),
                          dtype=float)
@@ -222,9 +224,20 @@ class Impulse:
 
     def seconds_after(self, epoch: Time) -> float:
         """The impulse's time in seconds after ``epoch`` (TDB)."""
-        t = self.time
-        if isinstance(t, (Time, str)):
-            t = as_epoch(t, error=BinarySystemError)
-            return float((t.tdb - epoch.tdb).to_value("s"))
-        s = float(to_si(t, "s", name="time", error=BinarySystemError))
-        return s
+        if isinstance(self.time, Time):
+            return float((self.time.tdb - epoch.tdb).to_value("s"))
+        return self.time
+
+
+def _impulse_time(value) -> float | Time:
+    """An impulse's time, checked when it is made: a scalar Time (a string is read as
+    ISO 8601, TDB) or a finite number of seconds (a float, or a Quantity of time)."""
+    if isinstance(value, (Time, str)):
+        if isinstance(value, str):
+            value = to_time(value, scale=DEFAULT_TIME_SCALE, key="time",
+                            error=BinarySystemError, precision=None)
+        if not value.isscalar:
+            raise BinarySystemError(f"time: expected a single time, got an array of shape "
+                                    f"{value.shape}")
+        return value
+    return float(to_si(value, "s", name="time", shape=(), error=BinarySystemError))

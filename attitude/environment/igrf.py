@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 from astropy.time import Time, TimeDelta
 
-from ..foundations.errors import MissingDependencyError, OrbitError
+from ..foundations.errors import MissingDependencyError, OrbitError, TorqueConfigError
+from ..foundations.quantities import to_time
 from ..model.orbit import as_path
 from .frames import check_frame, inertial_to_earth_fixed
 from .tabulation import TimeTable
@@ -102,7 +103,7 @@ class IGRF:
             raise OrbitError("the IGRF field needs the epoch of t = 0: pass epoch= (an "
                              "astropy Time) or an orbit that carries one (TLEOrbit)",
                              key="epoch")
-        self.epoch = Time(epoch)
+        self.epoch = to_time(epoch, key="epoch", error=TorqueConfigError)
         self.frame = check_frame(frame if frame is not None
                                  else getattr(orbit, "frame", "GCRF"))
         if not (isinstance(max_degree, (int, np.integer)) and 1 <= max_degree <= 13):

@@ -36,7 +36,7 @@ from astropy import units as u
 from astropy.time import Time, TimeDelta
 
 from ..foundations.errors import MissingDependencyError, TorqueConfigError
-from ..foundations.quantities import to_si
+from ..foundations.quantities import to_si, to_time
 from ..model.orbit import as_path
 from .frames import check_frame, inertial_to_earth_fixed
 from .tabulation import TimeTable
@@ -104,7 +104,8 @@ class MSISAtmosphere:
             raise TorqueConfigError(f"expected one of {MSIS_VERSIONS}, got {version!r}",
                                     key="version")
         self.version = version
-        self.epoch = None if epoch is None else Time(epoch)
+        self.epoch = None if epoch is None else to_time(epoch, key="epoch",
+                                                                   error=TorqueConfigError)
 
     def at(self, times, latitude, longitude, altitude) -> np.ndarray:
         """Density (kg/m^3) at geodetic ``latitude``, ``longitude`` (rad, WGS 84) and
@@ -173,7 +174,8 @@ class MSISAtmosphere:
         >>> bool(values.max() > 1.5 * values.min())     # day side against night side
         True
         """
-        epoch = self.epoch if epoch is None else Time(epoch)
+        epoch = self.epoch if epoch is None else to_time(epoch, key="epoch",
+                                                                    error=TorqueConfigError)
         if epoch is None:
             raise TorqueConfigError("the density along an orbit needs the epoch of t = 0",
                                     key="epoch")

@@ -21,10 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 from astropy import units as u
-from astropy.time import Time, TimeDelta
+from astropy.time import TimeDelta
 
 from ..foundations.constants import EARTH_RADIUS, SUN_RADIUS
-from ..foundations.errors import OrbitError
+from ..foundations.errors import OrbitError, TorqueConfigError
+from ..foundations.quantities import to_time
 from ..model.shadow import illumination_fraction
 from .frames import check_frame, gcrf_to_frame
 from .tabulation import TimeTable
@@ -57,7 +58,7 @@ class SunPath:
     """
 
     def __init__(self, epoch, *, frame: str = "GCRF", spacing: float = 3600.0):
-        self.epoch = Time(epoch)
+        self.epoch = to_time(epoch, key="epoch", error=TorqueConfigError)
         self.frame = check_frame(frame)
         self._table = TimeTable(self._evaluate, spacing=spacing, segment=48 * spacing)
 

@@ -15,6 +15,7 @@ import numpy as np
 from astropy.time import Time, TimeDelta
 
 from ..foundations.errors import MissingDependencyError, OrbitError
+from ..foundations.quantities import to_time
 from .frames import check_frame, teme_to_inertial
 from .tabulation import TimeTable
 
@@ -123,7 +124,8 @@ class TLEOrbit:
                              f"(code {self._satrec.error})", key="tle")
         self.element_epoch = Time(self._satrec.jdsatepoch, self._satrec.jdsatepochF,
                                   format="jd", scale="utc")
-        self.epoch = self.element_epoch if epoch is None else Time(epoch)
+        self.epoch = (self.element_epoch if epoch is None
+                      else to_time(epoch, key="epoch", error=OrbitError))
         self._table = TimeTable(self._evaluate, spacing=spacing, segment=4320 * spacing,
                                 derivative=True)
 

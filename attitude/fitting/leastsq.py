@@ -23,6 +23,7 @@ from scipy.optimize import least_squares
 from scipy.special import gammaincinv
 
 from ..foundations.errors import AttitudeError
+from ..foundations.progress import Progress
 from ..model.body import RigidBody
 from ..model.state import AttitudeState
 from .observations import LightcurveObservations, seconds_since
@@ -407,8 +408,13 @@ def fit(observations, body: RigidBody, state: AttitudeState, *, free=None, start
     options = dict(x_scale="jac", xtol=1e-8, ftol=1e-8, gtol=1e-8, method="trf",
                    max_nfev=500)
     options.update(solver)
-    solutions = [least_squares(lambda x: objective.residuals(x)[0], c[list(idx)],
-                               jac=objective.jacobian, **options) for c in candidates]
+    solutions = []
+    with Progress(len(candidates), "fit (least squares)", unit="starts") as bar, \
+            bar.ticking():                 # shown by the command line (not --quiet)
+        for c in candidates:
+            solutions.append(least_squares(lambda x: objective.residuals(x)[0],
+                                           c[list(idx)], jac=objective.jacobian, **options))
+            bar.update()
     best = min(solutions, key=lambda sol: sol.cost)
     alternatives = tuple(sorted(
         (2 * float(sol.cost), str(objective.model.periods(

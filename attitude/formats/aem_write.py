@@ -251,7 +251,8 @@ def _single_ephemeris(ephemeris) -> Ephemeris:
     if ephemeris.is_batch:
         raise EphemerisFormatError(
             f"a batch ephemeris holds {ephemeris.dataset.sizes['body']} bodies and an AEM one "
-            "object: write one at a time (Ephemeris(eph.dataset.isel(body=k)))")
+            "object: write one at a time (eph.member(k) or eph.member(\"secondary\"); "
+            "attitude convert --body NAME|INDEX)")
     if len(ephemeris) == 0:
         raise EphemerisFormatError("the ephemeris has no samples")
     return ephemeris

@@ -28,7 +28,9 @@ def convert(in_path: str | PathLike, out_path: str | PathLike, **options) -> Pat
 
     The input format is taken from the suffix for ``.nc``, from the suffix ``.bc`` or
     the DAF/CK content for a C-kernel, and from the content otherwise (KVN or XML AEM);
-    the output format from the suffix.  ``body``, ``segment`` and ``angular_velocity`` go
+    the output format from the suffix.  ``member`` picks one body of a batch or binary
+    file (its index or name: :meth:`Ephemeris.member`).  ``body``, ``segment`` and
+    ``angular_velocity`` go
     to :func:`read_aem`; for a CK, ``body``, ``sclk``, ``lsk``, ``frame``,
     ``instrument``, ``start``, ``stop``, ``step`` and ``kernels`` go to :func:`read_ck`;
     every other option to :func:`write_aem` (``object_name``, ``object_id``,
@@ -57,10 +59,11 @@ def convert(in_path: str | PathLike, out_path: str | PathLike, **options) -> Pat
     True
     """
     in_path, out_path = Path(in_path), Path(out_path)
+    member = options.pop("member", None)
     if is_ck(in_path):
         ck_opts = {k: options.pop(k) for k in _CK_OPTIONS + ("body",) if k in options}
         eph = read_ck(in_path, **ck_opts)
-        return _write(eph, out_path, options)
+        return _write(_member(eph, member), out_path, options)
     misplaced = [k for k in _CK_OPTIONS if k in options]
     if misplaced:
         raise EphemerisFormatError(f"{', '.join(misplaced)}: options for reading a SPICE "
@@ -73,7 +76,16 @@ def convert(in_path: str | PathLike, out_path: str | PathLike, **options) -> Pat
         eph = Ephemeris.from_netcdf(in_path)
     else:
         eph = read_aem(in_path, **read_opts)
-    return _write(eph, out_path, options)
+    return _write(_member(eph, member), out_path, options)
+
+
+def _member(eph: Ephemeris, member) -> Ephemeris:
+    """Body ``member`` of a batch (index or name), or ``eph`` itself."""
+    if member is None:
+        return eph
+    if not eph.is_batch:
+        raise EphemerisFormatError(f"body {member!r}: the file holds one body; omit --body")
+    return eph.member(member)
 
 
 def _write(eph: Ephemeris, out_path: Path, options: dict) -> Path:

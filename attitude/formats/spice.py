@@ -343,12 +343,13 @@ def _write_lsk(target: Path, lsk) -> None:
 def convert_to_ck(in_path: str | PathLike, out_path: str | PathLike, *,
                   object_id: str | int | None = None, object_name: str | None = None,
                   body_frame: str | None = None, frame: str | None = None,
-                  **options) -> Path:
+                  member=None, **options) -> Path:
     """``attitude convert IN OUT.bc``: read a netCDF (``.nc``) or AEM (``.aem``/``.xml``)
     ephemeris and write it with :func:`write_ck`.  ``object_id`` is the NAIF ID (a negative
     integer, default -999), ``body_frame`` the SPICE body-frame name (default SC_BODY_1),
     ``frame`` the SPICE reference frame (default from the ephemeris frame); ``object_name``
-    goes to the CK comments.  Returns the ``.bc`` path.
+    goes to the CK comments; ``member`` picks one body of a batch or binary file (index
+    or name, :meth:`Ephemeris.member`).  Returns the ``.bc`` path.
 
     Examples
     --------
@@ -373,6 +374,11 @@ def convert_to_ck(in_path: str | PathLike, out_path: str | PathLike, *,
         eph = Ephemeris.from_netcdf(in_path)
     else:
         eph = read_aem(in_path)
+    if member is not None:
+        if not eph.is_batch:
+            raise EphemerisFormatError(f"body {member!r}: the file holds one body; omit "
+                                       "--body")
+        eph = eph.member(member)
     body_id = -999
     if object_id is not None:
         try:

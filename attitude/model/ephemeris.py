@@ -303,6 +303,60 @@ class Ephemeris:
         return RigidBody(np.asarray(ds["inertia"].values[index], dtype=float).reshape(3, 3),
                          name=name)
 
+    def member(self, key) -> Ephemeris:
+        """One body of a batch as a single-body ephemeris (what an AEM or a SPICE CK
+        holds): ``key`` its index, or its label in the ``body`` coordinate
+        (``"secondary"`` of a binary system) or in ``body_name``.  Its inertia, principal
+        moments, name and mass become the single-body attributes.
+
+        Examples
+        --------
+        >>> import numpy as np, attitude as att
+        >>> from scipy.spatial.transform import Rotation
+        >>> bodies = [att.RigidBody.from_principal_moments(m, name=n)
+        ...           for m, n in (([1.0, 2.0, 3.0], "a"), ([2.0, 3.0, 4.0], "b"))]
+        >>> states = [att.AttitudeState("2030-01-01", Rotation.identity(), [0, 0, 0.1])] * 2
+        >>> eph = att.propagate(bodies, states, [0.0, 1.0])
+        >>> one = eph.member("b")
+        >>> one.is_batch, one.body.principal_moments.tolist(), one.body.name
+        (False, [2.0, 3.0, 4.0], 'b')
+        """
+        ds = self._dataset
+        if not self.is_batch:
+            raise EphemerisFormatError("member: a single-body ephemeris has no members")
+        n = ds.sizes["body"]
+        index = None
+        if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+            index = int(key)
+        elif isinstance(key, str):
+            text = key.strip()
+            for coord in ("body", "body_name"):
+                labels = [str(v) for v in ds[coord].values] if coord in ds.coords else []
+                if text in labels:
+                    index = labels.index(text)
+                    break
+            if index is None and text.lstrip("-").isdigit():
+                index = int(text)
+        if index is None or not -n <= index < n:
+            labels = sorted({str(v) for c in ("body", "body_name") if c in ds.coords
+                             for v in ds[c].values if str(v)})
+            raise EphemerisFormatError(
+                f"body {key!r}: not a body of this ephemeris (indices 0..{n - 1}"
+                + (f", names {', '.join(labels[:10])}" if labels else "") + ")")
+        index %= n
+        one = ds.isel(body=index)
+        attrs = dict(ds.attrs)
+        attrs["inertia"] = np.asarray(one["inertia"].values, float).ravel()
+        attrs["principal_moments"] = np.asarray(one["principal_moments"].values, float)
+        name = str(one["body_name"].values) if "body_name" in one.coords else ""
+        label = str(one["body"].values)
+        attrs["body_name"] = name or label
+        if "masses" in attrs:
+            attrs["mass"] = float(np.asarray(attrs.pop("masses"), float)[index])
+        one = one.drop_vars([v for v in ("inertia", "principal_moments", "body",
+                                         "body_name") if v in one.variables])
+        return Ephemeris(one.assign_attrs(attrs))
+
     def with_body(self, body: RigidBody) -> Ephemeris:
         """The same single-body motion with ``body``'s mass properties: the ``inertia``,
         ``principal_moments`` (and ``body_name``, ``mass``) attributes set and the

@@ -32,7 +32,7 @@ from ..foundations.errors import EphemerisFormatError, MissingDependencyError, W
 from ..foundations.figures import agg_figure
 from ..model.ephemeris import write_atomically
 from .motion import body_polygons, frame_times, nutation_series, sample_motion
-from .poinsot import body_axes, ellipsoid_surface, surface_quads
+from .poinsot import body_axes, ellipsoid_surface, plane_patch, surface_quads
 
 __all__ = ["PoinsotAnimation", "animate", "MOVIE_SUFFIXES"]
 
@@ -202,6 +202,13 @@ class PoinsotAnimation:
         distance = 2 * E / float(m.momentum[0])
         corners = np.array([[-r, -r], [r, -r], [r, r], [-r, r]]) * 0.9
         plane = np.column_stack([corners, np.full(4, -distance)])   # z = -L: L up is -z
+        # under torques E and L change: the ellipsoid scales with sqrt(E), the plane
+        # follows L at 2E/|L| (then both are redrawn each frame)
+        self._energy_scale = np.sqrt(np.asarray(m.energy, float) / E)
+        L = np.asarray(m.angular_momentum, float)
+        self._plane_half_width = 0.9 * r
+        self.varying = bool(np.abs(self._energy_scale - 1.0).max() > 1e-9
+                            or np.abs(L - L[0]).max() > 1e-9 * np.linalg.norm(L[0]))
         self.artists["plane"] = Poly3DCollection([plane], facecolor=(0.6, 0.6, 0.6, 0.25),
                                                  edgecolor="0.5")
         ax.add_collection3d(self.artists["plane"])
@@ -267,7 +274,7 @@ class PoinsotAnimation:
         tip = wi / norm * self.axis_length * 1.15 if norm > 0 else wi
         self.artists["omega_direction"].set_data_3d([0, tip[0]], [0, tip[1]], [0, tip[2]])
         if self.poinsot:
-            shell = self._ellipsoid @ R.T
+            shell = self._ellipsoid * self._energy_scale[j] @ R.T
             self._poinsot_poly.set_verts(shell)
             self._poinsot_poly.set_facecolor(_shaded(shell, "tab:cyan"))
             pol = m.omega[: j + 1] @ R.T                              # on the ellipsoid now
@@ -276,6 +283,16 @@ class PoinsotAnimation:
             self.artists["herpolhode"].set_data_3d(her[:, 0], her[:, 1], her[:, 2])
             self.artists["polhode_point"].set_data_3d([wi[0]], [wi[1]], [wi[2]])
             self.artists["omega"].set_data_3d([0, wi[0]], [0, wi[1]], [0, wi[2]])
+            if self.varying:
+                Ls = self.scene_rotation @ m.angular_momentum[j]
+                d = 2.0 * float(m.energy[j]) / np.linalg.norm(Ls)
+                self.artists["plane"].set_verts([plane_patch(Ls, d, np.zeros(3),
+                                                             self._plane_half_width)])
+                tip = Ls / np.linalg.norm(Ls) * d
+                self.artists["momentum"].set_data_3d([0, tip[0]], [0, tip[1]], [0, tip[2]])
+                tip = Ls / np.linalg.norm(Ls) * self.axis_length * 1.15
+                self.artists["momentum_direction"].set_data_3d([0, tip[0]], [0, tip[1]],
+                                                               [0, tip[2]])
         x = self.times[k] / self.time_unit[0]
         self.artists["cursor"].set_xdata([x, x])
         self.title.set_text(f"{self.eph.epoch.isot[:19]} {self.eph.time_scale} + "
@@ -284,6 +301,7 @@ class PoinsotAnimation:
     def _animated(self) -> list:
         """The artists that change from frame to frame, in drawing order."""
         names = ["body", "body_axes", "omega_direction", "momentum_direction",
+                 *(["plane"] if getattr(self, "varying", False) else []),
                  "ellipsoid", "polhode", "herpolhode", "omega", "momentum",
                  "polhode_point", "cursor"]
         out = []

@@ -13,104 +13,34 @@ herpolhode at full resolution); the rates and nutation angle against time with a
 cursor; the Sun and observer directions (variables ``sun_direction``,
 ``observer_direction`` of the dataset, inertial unit vectors, or ``geometry=``) and the
 lightcurve (a ``magnitude`` variable, or ``lightcurve=``) when present; and for a batch
-ephemeris the cloud of angular-momentum directions of its bodies.  The frames are
+ephemeris the cloud of angular-momentum directions of its bodies.  A binary system's
+ephemeris gets its own page (:mod:`attitude.pictures.binary_view`): both bodies on their
+mutual orbit.  The frames are
 decimated to at most ``max_frames`` (each carries the moving meshes as float32); the
 traces are drawn at full resolution, up to :data:`MAX_LINE_POINTS` points each.
 """
 
 from __future__ import annotations
 
-import html
-from pathlib import Path
-
 import numpy as np
 
 from ..foundations import quaternion as quat
-from ..foundations.errors import MissingDependencyError, WriterError
-from ..model.ephemeris import write_atomically
+from .binary_view import binary_view, is_binary
 from .motion import body_polygons, ephemeris_inertia, nutation_series, sample_motion
+from .page import (
+    MAX_LINE_POINTS,
+    View,
+    animation_controls,
+    float32,
+    mesh_faces,
+    plotly_modules,
+    thinned,
+)
 from .poinsot import ellipsoid_surface, plane_patch, surface_quads
 
 __all__ = ["View", "view", "MAX_LINE_POINTS"]
 
-#: The most points of one full-resolution line (time series, herpolhode).
-MAX_LINE_POINTS = 20000
 _AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
-
-
-def _plotly():
-    try:
-        import plotly.graph_objects as go  # optional: the [pictures] extra
-        from plotly.subplots import make_subplots  # optional: the [pictures] extra
-    except ImportError:
-        raise MissingDependencyError("the HTML view needs plotly: pip install "
-                                     "'attitude-dynamics[pictures]'") from None
-    return go, make_subplots
-
-
-class View:
-    """The interactive view: :attr:`html` (the whole page), :meth:`save`, and inline
-    display in Jupyter (``_repr_html_``).
-
-    Examples
-    --------
-    >>> import numpy as np, attitude as att
-    >>> from scipy.spatial.transform import Rotation
-    >>> body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
-    >>> state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.02, 0.0, 0.1])
-    >>> v = view(att.propagate(body, state, np.linspace(0.0, 300.0, 31)), max_frames=5)
-    >>> len(v.figure.frames), "<html>" in v.html, "<iframe" in v._repr_html_()
-    (5, True, True)
-    """
-
-    def __init__(self, figure, path: Path | None = None):
-        self.figure = figure
-        self.path = path
-
-    @property
-    def html(self) -> str:
-        """The page: one HTML document with plotly.js embedded (no network)."""
-        return self.figure.to_html(include_plotlyjs=True, full_html=True,
-                                   auto_play=False, config={"displaylogo": False})
-
-    def _repr_html_(self) -> str:
-        page = html.escape(self.html, quote=True)
-        return (f'<iframe srcdoc="{page}" style="width:100%;height:760px;border:none">'
-                "</iframe>")
-
-    def save(self, path) -> Path:
-        """Write the page atomically; returns the path."""
-        path = Path(path)
-        if path.suffix.lower() not in (".html", ".htm"):
-            raise WriterError(f"unknown suffix {path.suffix!r} for the view (use .html)",
-                              path=str(path))
-        text = self.html
-        self.path = write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
-        return self.path
-
-
-def _thin(n: int, most: int) -> np.ndarray:
-    return np.arange(0, n, max(1, int(np.ceil(n / most))))
-
-
-def _mesh_faces(polys: np.ndarray):
-    """Shared vertices and triangle indices of polygons (k, m, 3) (fans): the vertices
-    that polygons share are sent once (a grid's seam and poles are merged)."""
-    k, m, _ = polys.shape
-    points = polys.reshape(-1, 3)
-    scale = max(float(np.abs(points).max()), 1e-300)
-    _, first, inverse = np.unique(np.round(points / scale, 12), axis=0, return_index=True,
-                                  return_inverse=True)
-    base = np.arange(k)[:, None] * m
-    tri = np.concatenate([np.stack([base[:, 0], base[:, 0] + j, base[:, 0] + j + 1], -1)
-                          for j in range(1, m - 1)])
-    tri = inverse.reshape(-1)[tri]
-    keep = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])
-    return points[first], tri[keep]
-
-
-def _f32(x):
-    return np.asarray(x, dtype=np.float32)
 
 
 def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150,
@@ -152,7 +82,12 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
     >>> v.path == out and "plotly" in out.read_text()[:100000]
     True
     """
-    go, make_subplots = _plotly()
+    if is_binary(eph):          # two bodies on their mutual orbit
+        out = View(binary_view(eph, max_frames=max_frames))
+        if path is not None:
+            out.save(path)
+        return out
+    go, make_subplots = plotly_modules()
     t = np.asarray(eph.time, dtype=float)
     n = min(int(max_frames), t.size)
     times = np.linspace(t[0], t[-1], max(n, 2))
@@ -183,13 +118,13 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
 
     # --- the body --------------------------------------------------------------------
     polys = body_polygons(eph, shape, body_index)
-    verts, tri = _mesh_faces(polys)
+    verts, tri = mesh_faces(polys)
 
     def rotated(k, v):
         return quat.rotate(motion.quaternion[k], v)
 
     def mesh_xyz(k, v):
-        p = _f32(rotated(k, v))
+        p = float32(rotated(k, v))
         return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2]}
 
     add(go.Mesh3d(i=tri[:, 0], j=tri[:, 1], k=tri[:, 2], color="tan", opacity=1.0,
@@ -238,32 +173,42 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
         u = 1.9 * Lb[ok] / np.linalg.norm(Lb[ok], axis=-1, keepdims=True)
         add(go.Scatter3d(mode="markers", marker={"size": 2, "color": "black"},
                          name=f"L directions ({int(ok.sum())} bodies)",
-                         x=_f32(u[:, 0]), y=_f32(u[:, 1]), z=_f32(u[:, 2])), 1, 1)
+                         x=float32(u[:, 0]), y=float32(u[:, 1]), z=float32(u[:, 2])), 1, 1)
     # --- Poinsot's construction ----------------------------------------------------------
     if inertia is not None:
         moments, axes = np.linalg.eigh(inertia)
-        E, Lm = float(motion.energy[0]), float(motion.momentum[0])
+        E = float(motion.energy[0])
         semi = np.sqrt(2 * E / moments)
         shell = ellipsoid_surface(semi, axes, n_lat=10, n_lon=20)
-        ev, etri = _mesh_faces(surface_quads(*shell))
+        ev, etri = mesh_faces(surface_quads(*shell))
+        # under torques E and L change: the energy ellipsoid grows or shrinks with
+        # sqrt(E), the invariable plane follows L and its distance 2E/|L|, frame by frame
+        scale = np.sqrt(np.asarray(motion.energy, float) / E)
+        Lk = np.asarray(motion.angular_momentum, float)
+        varying = bool(np.abs(scale - 1.0).max() > 1e-9 or
+                       np.abs(Lk - Lk[0]).max() > 1e-9 * np.linalg.norm(Lk[0]))
         add(go.Mesh3d(i=etri[:, 0], j=etri[:, 1], k=etri[:, 2], color="#4fc3d9",
                       opacity=0.6, flatshading=True, name="energy ellipsoid",
-                      hoverinfo="skip", **mesh_xyz(0, ev)), 1, 2, lambda k: mesh_xyz(k, ev))
-        Lhat = L[0] / np.linalg.norm(L[0])
-        corners = plane_patch(Lhat, 2 * E / Lm, np.zeros(3), 1.2 * semi.max())
-        add(go.Mesh3d(x=corners[:, 0], y=corners[:, 1], z=corners[:, 2], i=[0, 0],
-                      j=[1, 2], k=[2, 3], color="gray", opacity=0.25,
-                      name="invariable plane", hoverinfo="skip"), 1, 2)
-        idx = _thin(t.size, MAX_LINE_POINTS)
+                      hoverinfo="skip", **mesh_xyz(0, ev)), 1, 2,
+            lambda k: mesh_xyz(k, ev * scale[k]))
+
+        def plane(k):
+            c = plane_patch(Lk[k], 2 * float(motion.energy[k]) / np.linalg.norm(Lk[k]),
+                            np.zeros(3), 1.2 * semi.max())
+            return {"x": c[:, 0], "y": c[:, 1], "z": c[:, 2]}
+        add(go.Mesh3d(i=[0, 0], j=[1, 2], k=[2, 3], color="gray", opacity=0.25,
+                      name="invariable plane", hoverinfo="skip", **plane(0)), 1, 2,
+            plane if varying else None)
+        idx = thinned(t.size, MAX_LINE_POINTS)
         full = sample_motion(eph, t[idx], body_index=body_index)
-        her = _f32(full.omega_inertial)
+        her = float32(full.omega_inertial)
         add(go.Scatter3d(mode="lines", line={"color": "purple", "width": 3},
                          name="herpolhode", x=her[:, 0], y=her[:, 1], z=her[:, 2]), 1, 2)
-        pol_idx = _thin(idx.size, 200)
+        pol_idx = thinned(idx.size, 200)
         pol = full.omega[pol_idx]
 
         def polhode(k):
-            p = _f32(rotated(k, pol))
+            p = float32(rotated(k, pol))
             return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2]}
         add(go.Scatter3d(mode="lines", line={"color": "darkorange", "width": 4},
                          name="polhode", **polhode(0)), 1, 2, polhode)
@@ -274,19 +219,19 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
         add(go.Scatter3d(mode="markers", marker={"size": 4, "color": "magenta"},
                          name="omega (contact point)", **contact(0)), 1, 2, contact)
     # --- time series -----------------------------------------------------------------
-    idx = _thin(t.size, MAX_LINE_POINTS)
+    idx = thinned(t.size, MAX_LINE_POINTS)
     w = np.asarray(ds["angular_velocity"].values, float)
     if eph.is_batch:
         w = w[body_index or 0]
     hours = t[-1] - t[0] >= 3 * 3600.0
     size, unit = (3600.0, "h") if hours else (1.0, "s")
     for a, (colour, label) in enumerate(zip(_AXIS_COLOURS, "xyz")):
-        add(go.Scatter(x=_f32(t[idx] / size), y=_f32(np.degrees(w[idx, a]) * size),
+        add(go.Scatter(x=float32(t[idx] / size), y=float32(np.degrees(w[idx, a]) * size),
                        mode="lines", line={"color": colour, "width": 1},
                        name=f"omega_{label} (deg/{unit})"), 2, 1)
     nutation = nutation_series(eph, body_index)
     if nutation is not None:
-        add(go.Scatter(x=_f32(t[idx] / size), y=_f32(np.degrees(nutation[idx])),
+        add(go.Scatter(x=float32(t[idx] / size), y=float32(np.degrees(nutation[idx])),
                        mode="lines", line={"color": "black", "width": 1, "dash": "dot"},
                        name="nutation (deg)"), 2, 1)
     low = float(np.degrees(np.nanmin(w)) * size)
@@ -301,8 +246,8 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
                    showlegend=False, **cursor(0)), 2, 1, cursor)
     if magnitude is not None:
         lt, mag = magnitude
-        li = _thin(lt.size, MAX_LINE_POINTS)
-        add(go.Scatter(x=_f32(lt[li] / size), y=_f32(mag[li]), mode="lines",
+        li = thinned(lt.size, MAX_LINE_POINTS)
+        add(go.Scatter(x=float32(lt[li] / size), y=float32(mag[li]), mode="lines",
                        line={"color": "black", "width": 1}, name="magnitude"), 3, 1)
         fig.update_yaxes(autorange="reversed", title_text="mag", row=3, col=1)
         mlo, mhi = float(np.nanmin(mag)), float(np.nanmax(mag))
@@ -318,8 +263,6 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
     fig.frames = [go.Frame(name=names[k], traces=[i for i, _ in moving],
                            data=[dict(type=fig.data[i].type, **f(k)) for i, f in moving])
                   for k in range(times.size)]
-    anim = {"frame": {"duration": 80, "redraw": True}, "transition": {"duration": 0},
-            "mode": "immediate", "fromcurrent": True}
     fig.update_layout(
         title=f"{ds.attrs.get('title', 'attitude ephemeris')} — epoch "
               f"{ds.attrs['epoch']} {eph.time_scale}, frame {eph.frame}",
@@ -327,21 +270,7 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
         scene={"aspectmode": "cube", **_box(2.0)},
         scene2={"aspectmode": "cube", **(_box(1.3 * float(semi.max()))
                                           if inertia is not None else {})},
-        updatemenus=[{"type": "buttons", "direction": "left", "x": 0.0, "y": -0.02,
-                      "xanchor": "left", "yanchor": "top", "showactive": False,
-                      "buttons": [{"label": "play", "method": "animate",
-                                   "args": [None, anim]},
-                                  {"label": "pause", "method": "animate",
-                                   "args": [[None], {"frame": {"duration": 0,
-                                                               "redraw": False},
-                                                     "mode": "immediate"}]}]}],
-        sliders=[{"active": 0, "x": 0.12, "len": 0.88, "y": -0.02, "yanchor": "top",
-                  "currentvalue": {"prefix": "t = "},
-                  "steps": [{"label": name, "method": "animate",
-                             "args": [[name], {"frame": {"duration": 0, "redraw": True},
-                                               "mode": "immediate",
-                                               "transition": {"duration": 0}}]}
-                            for name in names]}])
+        **animation_controls(names))
     out = View(fig)
     if path is not None:
         out.save(path)

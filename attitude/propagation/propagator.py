@@ -95,8 +95,14 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
 
     Parameters
     ----------
-    body : RigidBody, sequence of RigidBody, or :class:`attitude.Ensemble`
-        With an ensemble, ``state`` is omitted: ``propagate(ensemble, times)``.
+    body : RigidBody, sequence of RigidBody, :class:`attitude.Ensemble`, or
+        :class:`attitude.BinarySystem`
+        With an ensemble, ``state`` is omitted: ``propagate(ensemble, times)``.  A binary
+        system (two bodies that torque each other) takes a :class:`attitude.BinaryState`
+        and runs :func:`attitude.binary.propagate.propagate_binary`: ``method="lgvi"``
+        (the default: the Lie-group variational integrator at ``step``) or
+        ``"integrator"`` (DOP853 at ``rtol``), ``events`` a list of
+        :class:`attitude.Impulse`; the ephemeris has both bodies and the mutual orbit.
     state : AttitudeState or sequence of AttitudeState (same length, same epoch and frame)
     times : array-like (s since the epoch), Quantity, or astropy Time array
     torques : sequence of torque models, optional

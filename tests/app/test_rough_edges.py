@@ -138,6 +138,9 @@ def test_fit_posterior_follows_o_and_labels_units(fit_scenario, tmp_path, capsys
     assert not (tmp_path / "beside_scenario.nc").exists()
     assert not list(tmp_path.glob("*posterior*"))
     assert f"wrote {posterior}" in std.out
+    # the first line says how the solver stopped, in FitResult.status's words
+    assert std.out.splitlines()[0].startswith(("small fit: converged (",
+                                               "small fit: max_nfev at an acceptable chi2 ("))
     with xr.open_dataset(posterior) as ds:
         assert set(ds.data_vars) == {"phi0", "psi0", "regime"} and ds.sizes["walker"] == 6
     # the fitted scenario's comments: every parameter with its unit, angles in degrees
@@ -152,6 +155,7 @@ def test_fit_posterior_follows_o_and_labels_units(fit_scenario, tmp_path, capsys
     assert ratio == pytest.approx(inertia[0, 0] / inertia[2, 2], rel=1e-9)
     # progress of the MCMC steps, and emcee's words replaced by one line of ours
     assert "attitude: posterior (MCMC):" in std.err
+    assert "attitude: fit (least squares):" in std.err          # the starts, then the chain
     assert "integrated autocorrelation time" not in std.err
     notes = [ln for ln in std.err.splitlines() if "note" in ln]
     assert len(notes) <= 1 and all(ln.startswith("attitude: note: ") for ln in notes)

@@ -169,6 +169,14 @@ def test_shape_model_body_from_scenario(tmp_path):
     np.testing.assert_allclose(sc.body.center_of_mass, 1000.0, rtol=1e-13)
     with pytest.raises(att.ScenarioError, match="body.density: missing key"):
         load_scenario(write(tmp_path, text.replace('density = "2 g/cm3"', "")))
+    # the run's ephemeris names the shape, so that the pictures draw it (issue 29)
+    out = run_scenario(sc, netcdf=tmp_path / "cube.nc").outputs[0]
+    attrs = att.Ephemeris.from_netcdf(out).dataset.attrs
+    assert attrs["shape_model"] == str((tmp_path / "cube.obj").resolve())
+    assert attrs["shape_length_unit"] == "2 km"
+    from attitude.pictures.motion import body_polygons
+    polys = body_polygons(att.Ephemeris.from_netcdf(out))
+    assert polys.shape == (12, 3, 3)                     # the cube's triangles, not a grid
     (tmp_path / "open.obj").write_text(CUBE_OBJ.rsplit("f", 1)[0])
     with pytest.raises(att.ScenarioError, match="body.shape: .*not closed"):
         load_scenario(write(tmp_path, text.replace("cube.obj", "open.obj")))

@@ -163,3 +163,29 @@ def test_a_body_of_a_batch_is_drawn_with_its_own_attitude():
     truth = Rotation.from_quat(eph.dataset.quaternion.values[1, 15]).as_matrix()
     np.testing.assert_allclose(_drawn_axes(anim), truth,
                                rtol=0, atol=16 * EPS)
+
+
+def test_under_dissipation_the_plane_follows_the_energy_and_momentum():
+    """A damped run: E falls at fixed L.  In frame k the drawn point of contact lies on
+    the plane drawn for that frame, at 2 E_k/|L_k| along L_k, and on the energy ellipsoid
+    drawn for it (scaled by sqrt(E_k/E_0)), to 1e-12."""
+    from attitude.model.torques.dissipation import EnergyDissipation
+
+    body = att.RigidBody.from_principal_moments([0.61, 0.965, 1.0])
+    state = att.AttitudeState("2029-04-13", Rotation.identity(), [0.05, 0.0, 0.1])
+    t = np.linspace(0.0, 600.0, 121)
+    eph = att.propagate(body, state, t, torques=[EnergyDissipation(time_constant=30.0)])
+    E = eph.dataset.kinetic_energy.values
+    assert E[-1] < 0.99 * E[0]
+    anim = PoinsotAnimation(eph, t[::20], figsize=(4, 2))
+    assert anim.varying
+    for k in range(t[::20].size):
+        anim.update(k)
+        j = k * 20
+        p = _drawn_point(anim)
+        L = anim.scene_rotation @ eph.dataset.angular_momentum.values[j]
+        n = L / np.linalg.norm(L)
+        d = 2 * E[j] / np.linalg.norm(L)
+        assert abs(p @ n / d - 1) < 1e-12
+        plane = np.asarray(anim.artists["plane"]._faces[0])      # the corners drawn
+        np.testing.assert_allclose(plane @ n, d, rtol=1e-12)

@@ -69,3 +69,30 @@ def test_sun_observer_and_lightcurve_are_drawn_where_present():
     names = [d.name for d in v.figure.data]
     assert "to the sun" in names and "magnitude" in names and "to the observer" not in names
     assert list(_trace(v, "magnitude").y) == pytest.approx(ds["magnitude"].values, rel=1e-6)
+
+
+def test_under_dissipation_the_plane_and_ellipsoid_follow_the_energy():
+    """E decays at fixed L: in frame k the energy ellipsoid's semi-axes are sqrt(2 E_k /
+    I_i) and the invariable plane lies at 2 E_k / |L| along L (float32 in the page)."""
+    from attitude.model.torques.dissipation import EnergyDissipation
+
+    eph = att.propagate(BODY, STATE, np.linspace(0.0, 600.0, 61),
+                        torques=[EnergyDissipation(time_constant=30.0)])
+    v = view(eph, max_frames=61)
+    names = [d.name for d in v.figure.data]
+    E = eph.dataset.kinetic_energy.values
+    L = eph.dataset.angular_momentum.values
+    assert E[-1] < (1 - 1e-3) * E[0]               # the run does dissipate
+    for k in (0, 30, 60):
+        frame = v.figure.frames[k]
+        plane = frame.data[frame.traces.index(names.index("invariable plane"))]
+        corners = np.column_stack([plane.x, plane.y, plane.z]).astype(float)
+        n = L[k] / np.linalg.norm(L[k])
+        np.testing.assert_allclose(corners @ n, 2 * E[k] / np.linalg.norm(L[k]),
+                                   rtol=1e-6)
+        shell = frame.data[frame.traces.index(names.index("energy ellipsoid"))]
+        points = np.column_stack([shell.x, shell.y, shell.z]).astype(float)
+        body = eph.rotation[k].inv().apply(points)           # principal frame = body frame
+        moments = np.array([0.61, 0.965, 1.0])
+        residual = np.sum(body ** 2 * moments / (2 * E[k]), axis=1) - 1.0
+        assert np.abs(residual).max() < 1e-5

@@ -44,6 +44,21 @@ def page_file(tmp_path_factory):
                               max_frames=40).path
 
 
+@pytest.fixture(scope="module")
+def binary_page(tmp_path_factory):
+    ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(5e11, 400.0))
+    egg = att.RigidBody.from_mass_properties(
+        att.MassProperties.solid_ellipsoid(4.3e9, [103.16, 79.35, 66.13]))
+    system = att.BinarySystem(ball, egg)
+    n = np.sqrt(system.mu / 1190.0**3)
+    state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+                            Rotation.identity(), [0, 0, 7.7e-4],
+                            Rotation.from_euler("z", 15.0, degrees=True), [0, 0, n])
+    eph = att.propagate(system, state, np.linspace(0.0, 43200.0, 241), method="integrator",
+                        rtol=1e-9)
+    return eph.view(tmp_path_factory.mktemp("binary") / "binary.html", max_frames=40).path
+
+
 def _open(browser, path):
     page = browser.new_page(viewport={"width": 1200, "height": 900})
     errors, requests = [], []
@@ -89,6 +104,21 @@ def test_page_loads_offline_without_errors_and_draws(browser, page_file):
         later = _scene(page)
         changed = np.mean(np.any(first != later, axis=-1))
         assert changed > 0.002, changed            # the body turned between the steps
+        assert errors == []
+    finally:
+        page.close()
+
+
+def test_binary_page_loads_offline_and_the_secondary_moves(browser, binary_page):
+    page, errors, requests = _open(browser, binary_page)
+    try:
+        assert errors == []
+        assert all(u.startswith(("file:", "data:", "blob:")) for u in requests), requests
+        first = _scene(page)
+        assert len(np.unique(first.reshape(-1, 3), axis=0)) > 50
+        _goto_step(page, 20)                # half an orbit later
+        later = _scene(page)
+        assert np.mean(np.any(first != later, axis=-1)) > 0.002
         assert errors == []
     finally:
         page.close()

@@ -33,12 +33,14 @@ def command(args) -> int:
                                        "not from another C-kernel")
         out = convert_to_ck(args.input, args.output, object_id=args.object_id,
                             object_name=args.object_name, body_frame=args.body_frame,
-                            frame=args.frame, attitude_type=args.attitude_type)
+                            frame=args.frame, attitude_type=args.attitude_type,
+                            member=args.body)
     else:
         options = {k: v for k, v in (("object_name", args.object_name),
                                      ("object_id", args.object_id),
                                      ("ref_frame_b", args.body_frame),
-                                     ("attitude_type", args.attitude_type)) if v is not None}
+                                     ("attitude_type", args.attitude_type),
+                                     ("member", args.body)) if v is not None}
         if reading_ck:              # --frame: the SPICE frame the CK is read in
             options.update(ck_options, frame=args.frame)
         elif args.frame is not None:

@@ -107,8 +107,8 @@ def _fit(args) -> int:
             written.append(write_atomically(
                 png, lambda tmp, fig=fig: fig.savefig(tmp, format="png", dpi=120)))
     if not args.quiet:
-        print(f"{scenario.name}: {'converged' if result.success else 'NOT CONVERGED'} "
-              f"({result.message})")
+        status = result.status if result.success else result.status.upper()
+        print(f"{scenario.name}: {status} ({result.message})")
         print(result.summary())
         if len(result.alternatives) > 1:
             alts = ", ".join(f"{r} chi2 {c:.4g}" for c, r in result.alternatives)

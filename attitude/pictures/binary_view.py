@@ -1,0 +1,206 @@
+"""The interactive view of a binary system's ephemeris: both bodies turning on their
+mutual orbit, in one self-contained HTML file (plotly, as :mod:`attitude.pictures.viewer`).
+
+The scene is the inertial frame centred on the primary, in km: the primary at the
+origin and the secondary at the relative position, each drawn as the uniform ellipsoid
+of its principal moments and mass (true size) with its long axis; the whole mutual orbit
+as a line; a line from the secondary toward the primary.  Below, against time with a
+cursor: the separation and the secondary's libration angle (its long axis against the
+direction to the primary, in the orbit plane).  A binary ephemeris is recognised by its
+``relative_position`` variable and ``masses`` attribute (what ``att.propagate`` of a
+``BinarySystem`` writes); this module reads only the dataset, not the binary wing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..foundations import quaternion as quat
+from ..foundations.errors import EphemerisFormatError
+from .page import MAX_LINE_POINTS, animation_controls, float32, mesh_faces, plotly_modules, thinned
+from .poinsot import ellipsoid_surface, surface_quads
+
+__all__ = ["is_binary", "binary_view", "solid_semi_axes", "libration_series"]
+
+
+def is_binary(eph) -> bool:
+    """Whether ``eph`` holds a binary system (two bodies and their mutual orbit).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0, 0, 0.1])
+    >>> is_binary(att.propagate(body, state, [0.0, 1.0]))
+    False
+    """
+    ds = eph.dataset
+    return "relative_position" in ds and "masses" in ds.attrs and ds.sizes.get("body") == 2
+
+
+def solid_semi_axes(moments, mass: float) -> np.ndarray:
+    """Semi-axes (m) of the uniform solid ellipsoid of principal moments ``A <= B <= C``
+    (kg m^2) and ``mass`` (kg): ``a^2 = 5 (B + C - A) / (2 m)``, ...
+
+    Examples
+    --------
+    >>> m, a, b, c = 10.0, 3.0, 2.0, 1.0
+    >>> moments = [m * (b**2 + c**2) / 5, m * (a**2 + c**2) / 5, m * (a**2 + b**2) / 5]
+    >>> solid_semi_axes(moments, m).round(12).tolist()
+    [3.0, 2.0, 1.0]
+    """
+    A, B, C = np.asarray(moments, dtype=float)
+    squares = 2.5 / mass * np.array([B + C - A, A + C - B, A + B - C])
+    return np.sqrt(np.maximum(squares, 0.0))
+
+
+def libration_series(eph) -> np.ndarray:
+    """The secondary's libration angle at the samples, rad in (-pi/2, pi/2]: in the
+    mutual orbit plane (normal along the mean ``R x V``), the angle from the direction to
+    the primary (``-R``) to the secondary's long axis (the axis of its smallest moment;
+    either end, so the angle is taken modulo pi).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e12, 500.0))
+    >>> egg = att.RigidBody.from_mass_properties(
+    ...     att.MassProperties.solid_ellipsoid(1e9, [100.0, 80.0, 60.0]))
+    >>> system = att.BinarySystem(ball, egg)
+    >>> n = np.sqrt(system.mu / 1200.0**3)
+    >>> tilt = Rotation.from_euler("z", 10.0, degrees=True)       # long axis 10 deg off
+    >>> state = att.BinaryState("2026-12-01", [1200.0, 0, 0], [0, n * 1200.0, 0],
+    ...                         Rotation.identity(), [0, 0, 0], tilt, [0, 0, n])
+    >>> eph = att.propagate(system, state, [0.0], method="integrator")
+    >>> float(np.degrees(libration_series(eph)[0]).round(9))
+    10.0
+    """
+    ds = eph.dataset
+    R = np.asarray(ds["relative_position"].values, float)
+    V = np.asarray(ds["relative_velocity"].values, float)
+    normal = np.cross(R, V).mean(axis=0)
+    normal /= np.linalg.norm(normal)
+    inertia = np.asarray(ds["inertia"].values[1], float).reshape(3, 3)
+    long_axis = np.linalg.eigh(inertia)[1][:, 0]
+    q = np.asarray(ds["quaternion"].values[1], float)
+    axis = quat.rotate(q, np.broadcast_to(long_axis, q.shape[:-1] + (3,)))
+    toward = -R
+    x = toward - np.outer(toward @ normal, normal)
+    x /= np.linalg.norm(x, axis=-1, keepdims=True)
+    y = np.cross(normal, x)
+    angle = np.arctan2(np.sum(axis * y, -1), np.sum(axis * x, -1))
+    return (angle + np.pi / 2) % np.pi - np.pi / 2
+
+
+def binary_view(eph, *, max_frames: int = 150):
+    """The plotly figure of a binary ephemeris (what ``view`` draws for a binary).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e12, 500.0))
+    >>> egg = att.RigidBody.from_mass_properties(
+    ...     att.MassProperties.solid_ellipsoid(1e9, [100.0, 80.0, 60.0]))
+    >>> system = att.BinarySystem(ball, egg)
+    >>> n = np.sqrt(system.mu / 1200.0**3)
+    >>> state = att.BinaryState("2026-12-01", [1200.0, 0, 0], [0, n * 1200.0, 0],
+    ...                         Rotation.identity(), [0, 0, 1e-4], Rotation.identity(),
+    ...                         [0, 0, n])
+    >>> eph = att.propagate(system, state, np.linspace(0.0, 3600.0, 13), method="integrator")
+    >>> fig = binary_view(eph, max_frames=4)
+    >>> len(fig.frames), {"primary", "secondary", "mutual orbit"} <= {d.name for d in fig.data}
+    (4, True)
+    """
+    if not is_binary(eph):
+        raise EphemerisFormatError("not a binary ephemeris: expected relative_position and "
+                                   "the masses attribute (att.propagate of a BinarySystem)")
+    go, make_subplots = plotly_modules()
+    ds = eph.dataset
+    t = np.asarray(eph.time, dtype=float)
+    frames = np.unique(np.linspace(0, t.size - 1, max(min(int(max_frames), t.size), 1)
+                                   ).round().astype(int))
+    km = 1e-3
+    R = np.asarray(ds["relative_position"].values, float) * km
+    q = np.asarray(ds["quaternion"].values, float)
+    masses = np.asarray(ds.attrs["masses"], float)
+    moments = np.asarray(ds["principal_moments"].values, float)
+    inertia = np.asarray(ds["inertia"].values, float).reshape(2, 3, 3)
+    libration = np.degrees(libration_series(eph))
+    fig = make_subplots(rows=2, cols=1, row_heights=[0.68, 0.32],
+                        specs=[[{"type": "scene"}], [{"type": "xy", "secondary_y": True}]],
+                        subplot_titles=("primary and secondary (inertial frame, km)",
+                                        "separation and libration"), vertical_spacing=0.08)
+    moving = []
+
+    def add(trace, row, update=None, **where):
+        fig.add_trace(trace, row=row, col=1, **where)
+        if update is not None:
+            moving.append((len(fig.data) - 1, update))
+
+    for b, (name, colour) in enumerate((("primary", "tan"), ("secondary", "#8d8d8d"))):
+        axes = np.linalg.eigh(inertia[b])[1]
+        semi = solid_semi_axes(moments[b], masses[b]) * km
+        verts, tri = mesh_faces(surface_quads(*ellipsoid_surface(semi, axes, n_lat=10,
+                                                                   n_lon=20)))
+        centre = (lambda k: np.zeros(3)) if b == 0 else (lambda k: R[k])
+
+        def mesh(k, verts=verts, b=b, centre=centre):
+            p = float32(quat.rotate(q[b, k], verts) + centre(k))
+            return {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2]}
+        add(go.Mesh3d(i=tri[:, 0], j=tri[:, 1], k=tri[:, 2], color=colour, flatshading=True,
+                      name=name, hoverinfo="skip", **mesh(frames[0])), 1, mesh)
+        long_axis = axes[:, 0] * semi[0] * 1.6
+
+        def axis_line(k, b=b, long_axis=long_axis, centre=centre):
+            tip = quat.rotate(q[b, k], long_axis)
+            c = centre(k)
+            return {"x": [c[0] - tip[0], c[0] + tip[0]], "y": [c[1] - tip[1], c[1] + tip[1]],
+                    "z": [c[2] - tip[2], c[2] + tip[2]]}
+        add(go.Scatter3d(mode="lines", line={"color": "#d62728", "width": 5},
+                         name=f"{name} long axis", **axis_line(frames[0])), 1, axis_line)
+    idx = thinned(t.size, MAX_LINE_POINTS)
+    path = float32(R[idx])
+    add(go.Scatter3d(mode="lines", line={"color": "royalblue", "width": 2},
+                     name="mutual orbit", x=path[:, 0], y=path[:, 1], z=path[:, 2]), 1)
+
+    def toward_primary(k):
+        return {"x": [R[k, 0], 0.0], "y": [R[k, 1], 0.0], "z": [R[k, 2], 0.0]}
+    add(go.Scatter3d(mode="lines", line={"color": "gray", "width": 2, "dash": "dash"},
+                     name="toward the primary", **toward_primary(frames[0])), 1,
+        toward_primary)
+    hours = t[-1] - t[0] >= 3 * 3600.0
+    size, unit = (3600.0, "h") if hours else (1.0, "s")
+    separation = np.linalg.norm(R, axis=-1)
+    add(go.Scatter(x=float32(t[idx] / size), y=float32(separation[idx]), mode="lines",
+                   line={"color": "royalblue", "width": 1}, name="separation (km)"), 2)
+    add(go.Scatter(x=float32(t[idx] / size), y=float32(libration[idx]), mode="lines",
+                   line={"color": "#d62728", "width": 1}, name="libration (deg)"), 2,
+        secondary_y=True)
+    low, high = float(separation.min()), float(separation.max())
+    if high - low < 1e-9 * high:
+        low, high = low * 0.999, high * 1.001
+
+    def cursor(k):
+        x = float(t[k] / size)
+        return {"x": [x, x], "y": [low, high]}
+    add(go.Scatter(mode="lines", line={"color": "gray", "width": 2}, name="now",
+                   showlegend=False, **cursor(frames[0])), 2, cursor)
+    fig.update_xaxes(title_text=f"time ({unit})", row=2, col=1)
+    fig.update_yaxes(title_text="separation (km)", row=2, col=1, secondary_y=False)
+    fig.update_yaxes(title_text="libration (deg)", row=2, col=1, secondary_y=True)
+    names = [f"{t[k] / size:.4g} {unit}" for k in frames]
+    fig.frames = [go.Frame(name=name, traces=[i for i, _ in moving],
+                           data=[dict(type=fig.data[i].type, **f(k)) for i, f in moving])
+                  for name, k in zip(names, frames)]
+    reach = 1.15 * float(np.abs(R).max() + solid_semi_axes(moments[0], masses[0]).max() * km)
+    box = {"range": [-reach, reach], "autorange": False}
+    fig.update_layout(
+        title=f"{ds.attrs.get('title', 'binary system')} — epoch {ds.attrs['epoch']} "
+              f"{eph.time_scale}, frame {eph.frame}",
+        height=860, margin={"l": 40, "r": 20, "t": 70, "b": 40},
+        scene={"aspectmode": "cube", "xaxis": box, "yaxis": box, "zaxis": box},
+        **animation_controls(names))
+    return fig

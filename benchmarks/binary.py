@@ -1,0 +1,212 @@
+"""The full two-body problem (issue 28): one day of a Didymos-like binary asteroid with the
+Lie-group variational integrator (``method="lgvi"``, 30 s steps) and with DOP853
+(``method="integrator"``, rtol 1e-12).
+
+The system: a primary ellipsoid 425 x 410 x 390 m of 5.2e11 kg spinning in 2.26 h, a
+secondary ellipsoid 103.16 x 79.35 x 66.13 m of 4.3e9 kg on a circular orbit of 1190 m,
+synchronous, both attitudes aligned with the orbit frame; the mutual potential to order 4.
+Each method's CPU time (process time, after a warm-up on a short run), the largest
+relative energy and angular momentum errors over the day (outputs every 30 s), and the
+two methods' difference in position and attitudes after the day (the LGVI's error: DOP853
+at 1e-12 is 10^4 closer to the truth).
+
+``--gubas DIR``: the same against GUBAS (github.com/meyeralexj/gubas, the C++ code of
+Davis & Scheeres 2020) on its own Didymos example, from a run of it in ``DIR``
+(``didymos_inputs.json``: the inputs in SI; ``didymos_lgvi.csv`` and ``didymos_rk.csv``:
+its LGVI at 30 s and its RK7(8) at 1e-12, one row per output, rotation matrices body ->
+inertial row-major; ``gubas_summary.json``: its CPU times): the primary polyhedron (the
+example's vertex and facet files, read through ``RigidBody.from_obj``), the secondary
+ellipsoid, the same G and initial state.  Reported: our LGVI's position and attitude
+difference from GUBAS's LGVI after the day (the same discrete map: round-off and the
+implicit solve's tolerance), our DOP853's from GUBAS's RK7(8) (two accurate methods: the
+difference bounds either's error and any difference in the physics), and both timings.
+
+    python benchmarks/binary.py [--gubas /work/peers/gubas_runs] [--days 1]
+
+Writes ``benchmarks/results/binary.json`` atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from _machine import cpu_name  # noqa: E402
+
+import attitude as att  # noqa: E402
+from attitude.model.ephemeris import write_atomically  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+DAY = 86400.0
+ELLIPSOID = att.MassProperties.solid_ellipsoid
+
+
+def didymos_like(order: int = 4) -> tuple[att.BinarySystem, att.BinaryState]:
+    system = att.BinarySystem(
+        att.RigidBody.from_mass_properties(ELLIPSOID(5.2e11, [425.0, 410.0, 390.0])),
+        att.RigidBody.from_mass_properties(ELLIPSOID(4.3e9, [103.16, 79.35, 66.13])),
+        order=order)
+    n = np.sqrt(system.mu / 1190.0**3)
+    state = att.BinaryState("2022-09-26", [1190.0, 0, 0], [0, n * 1190.0, 0],
+                            Rotation.identity(), [0, 0, 2 * np.pi / (2.26 * 3600.0)],
+                            Rotation.identity(), [0, 0, n])
+    return system, state
+
+
+def timed(system, state, times, **options) -> tuple[att.Ephemeris, dict]:
+    """One propagation after a warm-up of a few steps: the ephemeris and its figures."""
+    att.propagate(system, state, times[:3], **options)
+    t0 = time.process_time()
+    eph = att.propagate(system, state, times, **options)
+    cpu = time.process_time() - t0
+    ds = eph.dataset
+    E, L = ds.total_energy.values, ds.total_angular_momentum.values
+    return eph, {**{k: v for k, v in options.items()}, "cpu_s": cpu,
+                 "max_abs_dE_over_E": float(np.abs(E / E[0] - 1.0).max()),
+                 "max_abs_dH_over_H": float((np.linalg.norm(L - L[0], axis=-1)
+                                             / np.linalg.norm(L[0])).max())}
+
+
+def matrices(eph, body: int) -> np.ndarray:
+    return Rotation.from_quat(eph.dataset.quaternion.values[body]).as_matrix()
+
+
+def angle_between(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Rotation angle of ``A^T B`` (rad), for stacks of rotation matrices."""
+    return Rotation.from_matrix(np.einsum("...ji,...jk->...ik", A, B)).magnitude()
+
+
+def differences(eph, R, A1, A2) -> dict:
+    """Position (m) and both attitudes (rad) of ``eph`` at its last time against another
+    run's ``R`` (3,) and matrices ``A1``, ``A2`` (3, 3)."""
+    return {"position_m": float(np.linalg.norm(eph.dataset.relative_position.values[-1] - R)),
+            "primary_attitude_rad": float(angle_between(matrices(eph, 0)[-1], A1)),
+            "secondary_attitude_rad": float(angle_between(matrices(eph, 1)[-1], A2))}
+
+
+def didymos_like_runs(days: float) -> dict:
+    system, state = didymos_like()
+    times = np.arange(0.0, days * DAY + 15.0, 30.0)
+    lgvi, a = timed(system, state, times, method="lgvi", step=30.0)
+    dop, b = timed(system, state, times, method="integrator", rtol=1e-12)
+    last = dop.dataset
+    a["difference_from_dop853"] = differences(
+        lgvi, last.relative_position.values[-1], matrices(dop, 0)[-1], matrices(dop, 1)[-1])
+    return {"system": "Didymos-like ellipsoids, order 4, 1190 m circular, synchronous "
+                      "secondary, primary period 2.26 h", "days": days,
+            "lgvi": a, "dop853": b}
+
+
+def gubas_case(folder: Path) -> tuple[att.BinarySystem, att.BinaryState, dict]:
+    """GUBAS's Didymos example from its inputs: the primary polyhedron through an OBJ
+    written from the example's vertex and facet files."""
+    inputs = json.loads((folder / "didymos_inputs.json").read_text())
+    primary, secondary, ic = inputs["primary"], inputs["secondary"], inputs["initial_state"]
+    vertices = np.loadtxt(primary["shape_vertex_file"], delimiter=",")[:, 1:]
+    facets = np.genfromtxt(primary["shape_facet_file"], delimiter=",", usecols=(0, 1, 2),
+                           dtype=int)
+    with tempfile.TemporaryDirectory() as tmp:
+        obj = Path(tmp) / "didymos.obj"
+        obj.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in vertices.tolist())
+                       + "".join(f"f {a} {b} {c}\n" for a, b, c in facets.tolist()))
+        body1 = att.RigidBody.from_obj(obj, density=primary["density_kg_m3"])
+    body2 = att.RigidBody.from_mass_properties(
+        ELLIPSOID(secondary["mass_kg"], secondary["semi_axes_m"]))
+    system = att.BinarySystem(body1, body2, order=inputs["mutual_potential_order"],
+                              G=inputs["G_m3_per_kg_s2"])
+    state = att.BinaryState(
+        "2022-09-26", ic["r_rel_inertial_m"], ic["v_rel_inertial_mps"],
+        Rotation.from_matrix(ic["R_primary_body_to_inertial"]), ic["w_primary_body_radps"],
+        Rotation.from_matrix(ic["R_secondary_body_to_inertial"]),
+        ic["w_secondary_body_radps"])
+    return system, state, inputs
+
+
+def gubas_run(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Times, positions and both attitude matrices of a GUBAS run's CSV."""
+    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return (rows[:, 0], rows[:, 1:4], rows[:, 7:16].reshape(-1, 3, 3),
+            rows[:, 19:28].reshape(-1, 3, 3))
+
+
+def gubas_comparison(folder: Path) -> dict:
+    system, state, inputs = gubas_case(folder)
+    summary = json.loads((folder / "gubas_summary.json").read_text())
+    t, R, A1, A2 = gubas_run(folder / "didymos_lgvi.csv")
+    step = inputs["integration"]["lgvi_step_s"]
+    lgvi, a = timed(system, state, t, method="lgvi", step=step)
+    a["difference_from_gubas_lgvi"] = differences(lgvi, R[-1], A1[-1], A2[-1])
+    a["largest_position_difference_over_the_run_m"] = float(np.linalg.norm(
+        lgvi.dataset.relative_position.values - R, axis=-1).max())
+    t_rk, R_rk, A1_rk, A2_rk = gubas_run(folder / "didymos_rk.csv")
+    rtol = inputs["integration"]["rk78_tolerance"]
+    dop, b = timed(system, state, t_rk, method="integrator", rtol=rtol)
+    b["difference_from_gubas_rk78"] = differences(dop, R_rk[-1], A1_rk[-1], A2_rk[-1])
+    gubas = {name: {"cpu_s": summary[name]["cpu_cpp"]["cpu_s"],
+                    "max_abs_dE_over_E": summary[name]["gubas_max_abs_dE_over_E"],
+                    "max_abs_dH_over_H": summary[name]["gubas_max_abs_dH_over_H"]}
+             for name in ("lgvi", "rk")}
+    gubas["lgvi"]["step"] = step
+    gubas["rk"]["rtol"] = rtol
+    gubas["lgvi_minus_rk78_position_m"] = float(np.linalg.norm(R[-1] - R_rk[-1]))
+    return {"source": inputs["source"], "days": float(t[-1]) / DAY, "lgvi": a, "dop853": b,
+            "gubas": gubas}
+
+
+def report(name: str, run: dict) -> None:
+    setting = f"step {run['step']:g} s" if "step" in run else f"rtol {run['rtol']:g}"
+    print(f"  {name:8s} {setting:14s} CPU {run['cpu_s']:6.2f} s   max |dE/E| "
+          f"{run['max_abs_dE_over_E']:.2e}   max |dH/H| {run['max_abs_dH_over_H']:.2e}")
+
+
+def print_difference(what: str, d: dict) -> None:
+    print(f"    {what}: position {d['position_m']:.3g} m, primary attitude "
+          f"{d['primary_attitude_rad']:.3g} rad, secondary {d['secondary_attitude_rad']:.3g} "
+          "rad")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--days", type=float, default=1.0, help="length of the Didymos-like run")
+    ap.add_argument("--gubas", type=Path, default=None, metavar="DIR",
+                    help="compare with a GUBAS run of its Didymos example in DIR")
+    ap.add_argument("--out", type=Path, default=HERE / "results" / "binary.json")
+    args = ap.parse_args(argv)
+
+    print(f"{cpu_name()}: one Didymos-like day, order 4, outputs every 30 s")
+    result = {"benchmark": "binary", "cpu": cpu_name(), "cores": os.cpu_count(),
+              "didymos_like": didymos_like_runs(args.days)}
+    runs = result["didymos_like"]
+    report("lgvi", runs["lgvi"])
+    report("dop853", runs["dop853"])
+    print_difference("lgvi - dop853 after the run", runs["lgvi"]["difference_from_dop853"])
+    if args.gubas is not None:
+        g = result["gubas"] = gubas_comparison(args.gubas)
+        print(f"GUBAS's Didymos example (polyhedron primary, {g['days']:g} day): "
+              f"{g['source']}")
+        report("lgvi", g["lgvi"])
+        print_difference("ours - GUBAS's LGVI", g["lgvi"]["difference_from_gubas_lgvi"])
+        report("dop853", g["dop853"])
+        print_difference("ours - GUBAS's RK7(8)", g["dop853"]["difference_from_gubas_rk78"])
+        for name, label in (("lgvi", "GUBAS lgvi"), ("rk", "GUBAS rk78")):
+            s = g["gubas"][name]
+            print(f"  {label}: CPU {s['cpu_s']:.2f} s (C++), max |dE/E| "
+                  f"{s['max_abs_dE_over_E']:.2e}, max |dH/H| {s['max_abs_dH_over_H']:.2e}")
+    text = json.dumps(result, indent=1)
+    path = write_atomically(args.out, lambda tmp: tmp.write_text(text))
+    print(f"results: {path}")
+
+
+if __name__ == "__main__":
+    main()
