@@ -14,6 +14,8 @@ optionally ``[expect]``::
     duration = "2 d"
     output_step = "10 min"
     order = 2
+    method = "lgvi"               # at `step` (default: 1/200 of the shortest period); or
+                                  # "integrator" (DOP853 at `rtol`, default 1e-10)
     synchronous = true            # the secondary locked: long axis to the primary
 
     [binary.primary]
@@ -96,8 +98,10 @@ __all__ = ["BINARY", "EXPECT", "BinaryScenario", "BinaryRun", "is_binary", "load
 #: Longest run, in Keplerian orbits (about a day of DOP853 here).
 MAX_ORBITS = 1e5
 
-#: Methods a ``[binary]`` table may name ("lgvi" runs as "integrator" until it lands).
-METHODS = ("integrator", "lgvi")
+#: Methods a ``[binary]`` table may name (:func:`attitude.binary.propagate_binary`'s).
+METHODS = AVAILABLE_METHODS
+#: DOP853's tolerance when ``method = "integrator"`` gives none.
+DEFAULT_RTOL = 1e-10
 
 #: An attitude (body -> inertial): a quaternion or Euler angles (the single-body
 #: scenario's form).
@@ -189,11 +193,14 @@ BINARY = Table("binary", (
     Key("duration", "quantity", unit="s", required=True, positive=True),
     Key("output_step", "quantity", unit="s", required=True, positive=True),
     Key("order", "integer", default=2, bounds=(2, 12), doc="of the mutual potential"),
-    Key("method", "string", choices=METHODS, default="integrator",
-        doc="integrator: DOP853 at rtol; lgvi: the Lie-group variational integrator"),
-    Key("step", "quantity", unit="s", positive=True, doc="the LGVI's step"),
-    Key("rtol", "number", positive=True, bounds=(None, 1.0), default=1e-10,
-        doc="DOP853 tolerance"),
+    Key("method", "string", choices=METHODS, default="lgvi",
+        doc="lgvi: the Lie-group variational integrator at fixed steps; integrator: "
+            "DOP853 at rtol"),
+    Key("step", "quantity", unit="s", positive=True,
+        doc="lgvi: the longest step (default 1/200 of the shortest of the orbit and spin "
+            "periods)"),
+    Key("rtol", "number", positive=True, bounds=(None, 1.0),
+        doc="integrator: DOP853's tolerance (default 1e-10)"),
     Key("synchronous", "boolean", default=False,
         doc="start the secondary locked: long axis to the primary, spin = orbital rate"),
     Key("output", "string", doc="netCDF ephemeris, relative to the scenario file"),
@@ -262,7 +269,7 @@ class BinaryScenario:
     impulses: tuple
     times: np.ndarray
     method: str
-    rtol: float
+    rtol: float | None
     step: float | None
     expect: tuple
     output: Path | None
@@ -397,15 +404,15 @@ def load_binary(path) -> BinaryScenario:
         raise _fail(path, "expect.period_change", "the first impulse is at an end of the "
                                                   "run: the change needs orbits before and "
                                                   "after it")
-    method, note = cfg["method"], ""
-    if method not in AVAILABLE_METHODS:
-        note = (f"method {method!r} is not available yet in this version: ran "
-                "'integrator' (DOP853)")
-        method = "integrator"
+    method = cfg["method"]
+    for key, owner in (("rtol", "integrator"), ("step", "lgvi")):
+        if key in cfg and method != owner:
+            raise _fail(path, f"binary.{key}", f"only with method = \"{owner}\" (the "
+                                               f"method is {method!r})")
+    rtol = cfg.get("rtol", DEFAULT_RTOL) if method == "integrator" else None
     output = path.parent / cfg["output"] if "output" in cfg else None
     return BinaryScenario(path, meta.get("name", path.stem), system, state, impulses, times,
-                          method, cfg["rtol"], cfg.get("step"), _expectations(expect),
-                          output, note)
+                          method, rtol, cfg.get("step"), _expectations(expect), output)
 
 
 def _body(path, table: dict, name: str) -> RigidBody:
@@ -677,6 +684,7 @@ def run_binary(scenario: BinaryScenario, *, output=None, write_outputs: bool = T
     ... epoch = "2026-12-01"
     ... duration = "30 h"
     ... output_step = "20 min"
+    ... method = "integrator"
     ... [binary.primary]
     ... primitive = "sphere"
     ... mass = 5.2e11
