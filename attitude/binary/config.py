@@ -88,11 +88,12 @@ from attitude.binary.system import BinaryState, BinarySystem, Impulse
 from attitude.foundations.errors import AttitudeError, ScenarioError
 from attitude.foundations.expectation import Expectation
 from attitude.foundations.quantities import TIME_SCALES
-from attitude.foundations.spec import Key, Table, validate
+from attitude.foundations.spec import Key, Table, markdown, validate
 from attitude.model.body import MassProperties, RigidBody
 from attitude.model.orbit import KeplerOrbit
 
 __all__ = ["BINARY", "EXPECT", "BinaryScenario", "BinaryRun", "is_binary", "load_binary",
+           "binary_reference",
            "run_binary", "impact_delta_v"]
 
 #: Longest run, in Keplerian orbits (about a day of DOP853 here).
@@ -734,3 +735,20 @@ def _check(e: Expectation, d, change) -> dict:
         return e.check(None)
     si = {"libration_amplitude": u.rad, "apsidal_rate": u.rad / u.s}.get(key, u.s)
     return e.check(float((got * si).to_value(e.unit)))
+
+
+def binary_reference() -> str:
+    """The key reference of binary scenario files as markdown (the generated section of
+    docs/binary.md): ``[binary]`` and its ``[expect]`` keys.
+
+    Examples
+    --------
+    >>> print(binary_reference().splitlines()[0])
+    ### `[binary]`
+    """
+    return markdown(Table("", (Key("binary", "table", table=BINARY),
+                               Key("expect", "table", table=EXPECT))))
+
+
+if __name__ == "__main__":        # python -m attitude.binary.config: the key reference
+    print(binary_reference(), end="")
