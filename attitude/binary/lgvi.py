@@ -20,46 +20,44 @@ to round-off whatever the iterate.  The map is symplectic and keeps the total an
 momentum ``R x p + sum A_i Pi_i`` exactly (the step adds ``h/2 (R x F + tau_1 + tau_2)``
 twice, zero for the mutual potential at any order); the energy error is ``O(h^2)`` and
 oscillates without drift.  Impulses change ``p`` and ``Pi`` between two steps.
+
+:func:`integrate_lgvi_batch` runs many systems of one family at once: every operation is
+per member, vectorised over the members (the implicit rotations too: the same Newton
+iteration on floats for a few bodies, on arrays over the bodies for many).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from functools import cache
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from attitude.binary.dynamics import unpack
-from attitude.binary.integrals import InertiaIntegrals, multi_indices
+from attitude.binary.integrals import InertiaIntegrals, rotated
 from attitude.binary.system import BinarySystem
 from attitude.foundations import quaternion as quat
-from attitude.foundations.errors import PropagationError
+from attitude.foundations.errors import BinarySystemError, PropagationError
 from attitude.propagation.splitting import step_count
 
-__all__ = ["integrate_lgvi", "default_step", "step_grid", "cayley_step"]
+__all__ = ["integrate_lgvi", "integrate_lgvi_batch", "default_step", "step_grid",
+           "cayley_step", "cayley_steps", "cayley_rotation"]
 
 #: Newton on the Cayley parameters stops when the correction is below this fraction of
 #: ``|f|`` (about 4.5 ulps).
 NEWTON_RTOL = 1e-15
 #: ... or after this many iterations (a step too long for the spin has no solution).
 NEWTON_MAX = 20
+#: Up to this many bodies, the implicit rotations are solved one by one in Python floats
+#: (faster than numpy's per-call overhead); more, as arrays over the bodies.
+FLOAT_MEMBERS = 4
 #: The default step is this fraction of the shortest of the orbit and spin periods.
 STEP_FRACTION = 1.0 / 200.0
 
 
-def _cayley(f) -> np.ndarray:
-    """``(E + S(f))(E - S(f))^-1 = E + 2 (S + S^2) / (1 + f.f)`` of one ``f``."""
-    x, y, z = f
-    c = 2.0 / (1.0 + x * x + y * y + z * z)
-    return np.array([[1.0 - c * (y * y + z * z), c * (x * y - z), c * (x * z + y)],
-                     [c * (x * y + z), 1.0 - c * (x * x + z * z), c * (y * z - x)],
-                     [c * (x * z - y), c * (y * z + x), 1.0 - c * (x * x + y * y)]])
-
-
-def _solve3(m, r):
-    """``m^-1 r`` for a 3x3 ``m`` (nested lists) by Cramer's rule."""
+def _solve3(m, r) -> tuple:
+    """``m^-1 r`` by Cramer's rule, ``m`` 3x3 nested and ``r`` 3 components, each entry
+    a float or an array over members (numpy's batched solve costs far more at 3x3)."""
     (a, b, c), (d, e, f), (g, h, i) = m
     A, B, C = e * i - f * h, f * g - d * i, d * h - e * g
     det = a * A + b * B + c * C
@@ -69,34 +67,24 @@ def _solve3(m, r):
     return x, y, z
 
 
-def cayley_step(g, inertia, h: float) -> np.ndarray:
-    """The rotation ``F`` (3x3) with ``h S(g) = F J - J F^T``, ``J = tr(I)/2 E - I``, for
-    a body-frame momentum ``g`` (3,) and inertia tensor ``inertia`` (3x3): Newton's
-    method on the Cayley parameters ``f``, ``h g (1 + f.f) = 2 (I f + f x I f)``, from
-    ``f = h I^-1 g / 2`` (3-vectors as Python floats: faster than numpy at this size).
+def _keep(done, old, new):
+    """``old`` where ``done``, else ``new`` (a bool and floats, or arrays)."""
+    if isinstance(done, (bool, np.bool_)):
+        return old if done else new
+    return np.where(done, old, new)
 
-    Raises
-    ------
-    PropagationError
-        Newton does not converge in :data:`NEWTON_MAX` iterations (``h |g|`` beyond
-        what one rotation can carry: the step is too long for the spin).
 
-    Examples
-    --------
-    A free body spinning about a principal axis turns by ``asin(h w)`` in one step
-    (``h w`` to second order):
-
-    >>> import numpy as np
-    >>> I = np.diag([1.0, 2.0, 3.0])
-    >>> F = cayley_step([0.0, 0.0, 3.0 * 0.1], I, 2.0)   # w = 0.1 rad/s
-    >>> bool(np.isclose(np.arctan2(F[1, 0], F[0, 0]), np.arcsin(0.2), rtol=1e-14))
-    True
-    """
-    I = np.asarray(inertia, float).tolist()  # noqa: E741 - the inertia tensor
-    u0, u1, u2 = (h * float(v) for v in g)
+def _cayley_parameters(u, I) -> tuple:
+    """Newton on ``u (1 + f.f) = 2 (I f + f x I f)`` for the Cayley parameters ``f``,
+    from ``f = I^-1 u / 2``: ``u`` 3 components and ``I`` 3x3 nested, each entry a float
+    (one body: Python floats, fastest at this size) or an array over members (the same
+    arithmetic, vectorised); a member stops at its own convergence.  ``None`` if Newton
+    does not converge in :data:`NEWTON_MAX` iterations."""
+    u0, u1, u2 = u
     f0, f1, f2 = _solve3(I, (0.5 * u0, 0.5 * u1, 0.5 * u2))
     previous = math.inf
-    eps = np.finfo(float).eps
+    done = False
+    eps = float(np.finfo(float).eps)
     for _ in range(NEWTON_MAX):
         i0 = I[0][0] * f0 + I[0][1] * f1 + I[0][2] * f2
         i1 = I[1][0] * f0 + I[1][1] * f1 + I[1][2] * f2
@@ -110,56 +98,103 @@ def cayley_step(g, inertia, h: float) -> np.ndarray:
               [f2 * I[0][j] - f0 * I[2][j] for j in range(3)],
               [f0 * I[1][j] - f1 * I[0][j] for j in range(3)]]
         SIf = ((0.0, -i2, i1), (i2, 0.0, -i0), (-i1, i0, 0.0))
-        u, f = (u0, u1, u2), (f0, f1, f2)
-        jac = [[2.0 * u[r] * f[c] - 2.0 * (I[r][c] + SI[r][c] - SIf[r][c]) for c in range(3)]
-               for r in range(3)]
+        uu, ff = (u0, u1, u2), (f0, f1, f2)
+        jac = [[2.0 * uu[r] * ff[c] - 2.0 * (I[r][c] + SI[r][c] - SIf[r][c])
+                for c in range(3)] for r in range(3)]
         d0, d1, d2 = _solve3(jac, residual)
-        f0, f1, f2 = f0 - d0, f1 - d1, f2 - d2
-        correction = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        size = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+        f0, f1, f2 = (_keep(done, f0, f0 - d0), _keep(done, f1, f1 - d1),
+                      _keep(done, f2, f2 - d2))
+        correction = (d0 * d0 + d1 * d1 + d2 * d2) ** 0.5
+        size = (f0 * f0 + f1 * f1 + f2 * f2) ** 0.5
         # converged, or at the round-off floor (the correction stopped shrinking at a
-        # few ulps of |f|)
-        if correction <= NEWTON_RTOL * size or (correction <= 64 * eps * size
-                                                 and correction >= 0.5 * previous):
-            return _cayley((f0, f1, f2))
-        if not math.isfinite(size):
-            break
+        # few ulps of |f|); a member once done stays done
+        done = done | (correction <= NEWTON_RTOL * size) | (
+            (correction <= 64 * eps * size) & (correction >= 0.5 * previous))
+        if np.all(done):
+            return f0, f1, f2
+        if not np.all(np.isfinite(size)):
+            return None
         previous = correction
+    return None
+
+
+def _cayley_matrix(f0, f1, f2) -> list:
+    """``E + 2 (S + S^2) / (1 + f.f)`` as nested rows (floats or arrays)."""
+    c = 2.0 / (1.0 + f0 * f0 + f1 * f1 + f2 * f2)
+    return [[1.0 - c * (f1 * f1 + f2 * f2), c * (f0 * f1 - f2), c * (f0 * f2 + f1)],
+            [c * (f0 * f1 + f2), 1.0 - c * (f0 * f0 + f2 * f2), c * (f1 * f2 - f0)],
+            [c * (f0 * f2 - f1), c * (f1 * f2 + f0), 1.0 - c * (f0 * f0 + f1 * f1)]]
+
+
+def cayley_rotation(f: np.ndarray) -> np.ndarray:
+    """``(E + S(f))(E - S(f))^-1 = E + 2 (S + S^2) / (1 + f.f)`` of Cayley parameters
+    ``(..., 3)``: rotation matrices ``(..., 3, 3)``, orthogonal to round-off for any ``f``.
+
+    Examples
+    --------
+    >>> F = cayley_rotation(np.array([0.0, 0.0, np.tan(0.25)]))     # 0.5 rad about z
+    >>> bool(np.isclose(np.arctan2(F[1, 0], F[0, 0]), 0.5, rtol=1e-15))
+    True
+    """
+    f = np.asarray(f, float)
+    rows = _cayley_matrix(f[..., 0], f[..., 1], f[..., 2])
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def cayley_steps(g, inertia, h) -> np.ndarray:
+    """The rotations ``F`` ``(n, 3, 3)`` with ``h S(g) = F J - J F^T``,
+    ``J = tr(I)/2 E - I``, for body-frame momenta ``g`` ``(n, 3)``, inertia tensors
+    ``(n, 3, 3)`` and steps ``h`` (a float or ``(n,)``): Newton's method on the Cayley
+    parameters ``f``, ``h g (1 + f.f) = 2 (I f + f x I f)``, from ``f = h I^-1 g / 2``,
+    every member at once (each stops at its own convergence).
+
+    Raises
+    ------
+    PropagationError
+        Newton does not converge in :data:`NEWTON_MAX` iterations (``h |g|`` beyond
+        what one rotation can carry: the step is too long for the spin).
+
+    Examples
+    --------
+    >>> I = np.diag([1.0, 2.0, 3.0])[None]
+    >>> F = cayley_steps(np.array([[0.0, 0.0, 0.3]]), I, 2.0)        # w = 0.1 rad/s
+    >>> bool(np.isclose(np.arctan2(F[0, 1, 0], F[0, 0, 0]), np.arcsin(0.2), rtol=1e-14))
+    True
+    """
+    I = np.asarray(inertia, float)  # noqa: E741 - the inertia tensor
+    u = np.asarray(h, float).reshape(-1, 1) * np.asarray(g, float)
+    if len(u) <= FLOAT_MEMBERS:        # a few bodies: one by one in Python floats
+        fs = [_cayley_parameters(v.tolist(), m.tolist()) for v, m in zip(u, I)]
+        if all(f is not None for f in fs):
+            return np.array([_cayley_matrix(*f) for f in fs])
+        f = None
+    else:                              # many: arrays over the members
+        f = _cayley_parameters(tuple(u.T), [[I[:, r, c] for c in range(3)] for r in range(3)])
+        f = None if f is None else np.stack(f, axis=-1)
+    if f is not None:
+        return cayley_rotation(f)
+    worst = max(float(np.linalg.norm(_solve3(m.tolist(), v.tolist())))
+                for m, v in zip(I, u))
     raise PropagationError(
         f"step: the LGVI's implicit rotation did not converge in {NEWTON_MAX} Newton "
-        f"iterations (h |I^-1 g| = {math.hypot(*_solve3(I, (u0, u1, u2))):.3g} rad in one "
-        "step); give a shorter step")
+        f"iterations (h |I^-1 g| = {worst:.3g} rad in one step); give a shorter step")
 
 
-@cache
-def _tensor_index(k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Degree ``k``: the multi-index position of each of the ``3^k`` tensor entries, and
-    one tensor entry for each multi-index."""
-    pos = {tuple(m): i for i, m in enumerate(multi_indices(k).tolist())}
-    full = np.array([pos[tuple(np.bincount(idx, minlength=3))] for idx in
-                     itertools.product(range(3), repeat=k)], dtype=np.int64)
-    first = np.array([int(np.flatnonzero(full == i)[0]) for i in range(len(pos))])
-    return full, first
+def cayley_step(g, inertia, h: float) -> np.ndarray:
+    """:func:`cayley_steps` of one body: ``F`` (3x3) for ``g`` (3,), ``inertia`` (3x3).
 
+    Examples
+    --------
+    A free body spinning about a principal axis turns by ``asin(h w)`` in one step
+    (``h w`` to second order):
 
-class _Turner:
-    """One body's inertia integrals as full tensors, turned by an attitude matrix with
-    ``k`` small matrix products per degree (the lean form of
-    :func:`attitude.binary.integrals.rotated` for one attitude)."""
-
-    def __init__(self, integrals: InertiaIntegrals):
-        self.low = [np.asarray(t, float) for t in integrals.degrees[:2]]
-        self.tensors = [(k, np.asarray(t, float)[_tensor_index(k)[0]].reshape(3, -1),
-                         _tensor_index(k)[1]) for k, t in enumerate(integrals.degrees)
-                        if k >= 2]
-
-    def __call__(self, A: np.ndarray) -> InertiaIntegrals:
-        out = list(self.low)
-        for k, X, first in self.tensors:
-            for _ in range(k):     # turn the first index, then move it to the back
-                X = (A @ X).T.reshape(3, -1)
-            out.append(X.reshape(-1)[first])
-        return InertiaIntegrals(tuple(out))
+    >>> import numpy as np
+    >>> I = np.diag([1.0, 2.0, 3.0])
+    >>> F = cayley_step([0.0, 0.0, 3.0 * 0.1], I, 2.0)   # w = 0.1 rad/s
+    >>> bool(np.isclose(np.arctan2(F[1, 0], F[0, 0]), np.arcsin(0.2), rtol=1e-14))
+    True
+    """
+    return cayley_steps(np.asarray(g, float)[None], np.asarray(inertia, float)[None], h)[0]
 
 
 def default_step(system: BinarySystem, y0: np.ndarray) -> float:
@@ -205,10 +240,18 @@ def step_grid(knots: np.ndarray, h: float) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def _loads(system: BinarySystem, turners, R: np.ndarray, A: np.ndarray):
-    """Force on the secondary (inertial) and both body-frame torques ``(2, 3)``."""
-    f = system.gravity.forces(R, turners[0](A[0]), turners[1](A[1]))
-    M = np.stack([A[0].T @ f.torque_primary, A[1].T @ f.torque_secondary])
+def _stacked(systems) -> tuple:
+    """The integrals of both bodies of every member, stacked ``(n, n_k)`` per degree."""
+    return tuple(InertiaIntegrals(tuple(np.stack([s.integrals[b].degrees[k] for s in systems])
+                                        for k in range(len(systems[0].integrals[b].degrees))))
+                 for b in range(2))
+
+
+def _loads(gravity, integrals, R: np.ndarray, A: np.ndarray):
+    """Force on the secondary (inertial, ``(n, 3)``) and both body-frame torques
+    ``(n, 2, 3)`` of the members at ``R`` ``(n, 3)``, attitudes ``A`` ``(n, 2, 3, 3)``."""
+    f = gravity.forces(R, rotated(integrals[0], A[:, 0]), rotated(integrals[1], A[:, 1]))
+    M = np.einsum("nbji,nbj->nbi", A, np.stack([f.torque_primary, f.torque_secondary], 1))
     return f.force, M
 
 
@@ -216,7 +259,8 @@ def integrate_lgvi(system: BinarySystem, y0: np.ndarray, t: np.ndarray, step: fl
                    impulses=()) -> np.ndarray:
     """Integrate one system from ``y0`` (time 0) to the sorted times ``t >= 0`` with the
     LGVI at steps no longer than ``step`` (s); returns ``(len(t), 20)`` state vectors
-    (:mod:`attitude.binary.dynamics`) with canonical unit quaternions.
+    (:mod:`attitude.binary.dynamics`) with canonical unit quaternions
+    (:func:`integrate_lgvi_batch` of one member).
 
     ``impulses`` are ``(time, Impulse)`` pairs: the steps end at each impulse's time,
     where it changes the momenta (a sample at that time holds the state after it).
@@ -239,55 +283,96 @@ def integrate_lgvi(system: BinarySystem, y0: np.ndarray, t: np.ndarray, step: fl
     >>> bool(lag < 500.0 * (2 * np.pi / 400)**2 * (2 * np.pi / 3 + 1))
     True
     """
+    return integrate_lgvi_batch([system], np.asarray(y0, float)[None], t, step,
+                                [list(impulses)])[0]
+
+
+def integrate_lgvi_batch(systems, y0: np.ndarray, t: np.ndarray, step: float,
+                         impulses=None) -> np.ndarray:
+    """Integrate ``n`` systems at once (a family: one mutual-potential order and ``G``)
+    from ``y0`` ``(n, 20)`` to the sorted times ``t >= 0`` at a common step no longer than
+    ``step``; returns ``(n, len(t), 20)``.  Each member is the same map as
+    :func:`integrate_lgvi` alone (every operation is per member), vectorised over the
+    members: an ensemble costs far less than its members one by one.
+
+    ``impulses``: for each member a list of ``(time, Impulse)`` pairs (the steps of
+    every member end at every member's impulse times).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from attitude.binary.dynamics import pack
+    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e9, 50.0))
+    >>> egg = att.RigidBody.from_mass_properties(
+    ...     att.MassProperties.solid_ellipsoid(2e8, [30.0, 20.0, 15.0]))
+    >>> systems = [att.BinarySystem(ball, egg), att.BinarySystem(ball, ball)]
+    >>> y0 = np.stack([pack([500.0, 0, 0], [0, np.sqrt(s.mu / 500.0), 0], [0, 0, 0, 1.0],
+    ...                     [0, 0, 0], [0, 0, 0, 1.0], [0, 0, 1e-4]) for s in systems])
+    >>> y = integrate_lgvi_batch(systems, y0, [0.0, 3600.0], 30.0)
+    >>> one = integrate_lgvi(systems[0], y0[0], [0.0, 3600.0], 30.0)
+    >>> y.shape, bool(np.allclose(y[0], one, rtol=0, atol=1e-12))
+    ((2, 2, 20), True)
+    """
+    systems = list(systems)
+    n = len(systems)
+    order, G = systems[0].order, systems[0].G
+    if any(s.order != order or s.G != G for s in systems):
+        raise BinarySystemError("systems: a batch shares one mutual-potential order and G")
     t = np.asarray(t, float)
-    y0 = np.asarray(y0, float)
-    out = np.empty((t.size, 20))
+    y0 = np.asarray(y0, float).reshape(n, 20)
+    out = np.empty((n, t.size, 20))
     if t.size == 0:
         return out
-    mu = system.reduced_mass
-    inertia = np.stack([system.primary.inertia, system.secondary.inertia])
-    kicks = sorted((e for e in impulses if e[0] <= t[-1]), key=lambda e: e[0])  # later: no effect
-    grid = step_grid(np.concatenate([t, [s for s, _ in kicks]]), step)
+    impulses = [[] for _ in range(n)] if impulses is None else [list(i) for i in impulses]
+    mu = np.array([s.reduced_mass for s in systems])[:, None]
+    inertia = np.array([[s.primary.inertia, s.secondary.inertia] for s in systems])
+    kicks = sorted(((when, m, e) for m, events in enumerate(impulses) for when, e in events
+                    if when <= t[-1]), key=lambda k: k[0])      # later ones: no effect
+    grid = step_grid(np.concatenate([t, [k[0] for k in kicks]]), step)
     sample = np.searchsorted(grid, t)                 # grid node of each output time
-    kick_at = np.searchsorted(grid, [s for s, _ in kicks]).tolist()
+    kick_at = np.searchsorted(grid, [k[0] for k in kicks]).tolist()
 
     R, V, q1, w1, q2, w2 = unpack(y0)
     R = R.copy()
     p = mu * V
-    A = Rotation.from_quat(np.stack([q1, q2])).as_matrix()
-    Pi = np.einsum("bij,bj->bi", inertia, np.stack([w1, w2]))
-    turners = [_Turner(T) for T in system.integrals]
-    F, M = _loads(system, turners, R, A)
+    A = Rotation.from_quat(np.stack([q1, q2], 1).reshape(-1, 4)).as_matrix().reshape(n, 2, 3, 3)
+    Pi = np.einsum("nbij,nbj->nbi", inertia, np.stack([w1, w2], 1))
+    integrals, gravity = _stacked(systems), systems[0].gravity
+    flat_inertia = inertia.reshape(-1, 3, 3)
+    F, M = _loads(gravity, integrals, R, A)
 
     nodes = np.unique(sample)
-    Rs, ps = np.empty((nodes.size, 3)), np.empty((nodes.size, 3))
-    As, Pis = np.empty((nodes.size, 2, 3, 3)), np.empty((nodes.size, 2, 3))
+    Rs, ps = np.empty((nodes.size, n, 3)), np.empty((nodes.size, n, 3))
+    As, Pis = np.empty((nodes.size, n, 2, 3, 3)), np.empty((nodes.size, n, 2, 3))
     j = 0
     for k in range(grid.size):
         if k > 0:
             h = grid[k] - grid[k - 1]
             g = Pi + 0.5 * h * M
-            Fk = np.stack([cayley_step(g[0], inertia[0], h), cayley_step(g[1], inertia[1], h)])
+            Fk = cayley_steps(g.reshape(-1, 3), flat_inertia, h).reshape(n, 2, 3, 3)
             R = R + (h / mu) * p + (0.5 * h * h / mu) * F
-            A = A @ Fk
-            F1, M1 = _loads(system, turners, R, A)
+            A = np.einsum("nbij,nbjk->nbik", A, Fk)
+            F1, M1 = _loads(gravity, integrals, R, A)
             p = p + 0.5 * h * (F + F1)
-            Pi = np.einsum("bji,bj->bi", Fk, g) + 0.5 * h * M1
+            Pi = np.einsum("nbji,nbj->nbi", Fk, g) + 0.5 * h * M1
             F, M = F1, M1
         while kick_at and kick_at[0] == k:
             kick_at.pop(0)
-            p, Pi = _kick(p, Pi, A, mu, kicks.pop(0)[1])
+            _, m, impulse = kicks.pop(0)
+            p[m], Pi[m] = _kick(p[m], Pi[m], A[m], mu[m, 0], impulse)
         if j < nodes.size and nodes[j] == k:
             Rs[j], ps[j], As[j], Pis[j] = R, p, A, Pi
             j += 1
     rows = np.searchsorted(nodes, sample)
-    omega = np.linalg.solve(inertia, Pis[..., None])[..., 0]               # (n, 2, 3)
+    omega = np.linalg.solve(inertia[None], Pis[..., None])[..., 0]         # (T, n, 2, 3)
     q = quat.canonical(Rotation.from_matrix(As.reshape(-1, 3, 3)).as_quat()
-                       ).reshape(nodes.size, 2, 4)
-    out[:, 0:3] = Rs[rows]
-    out[:, 3:6] = ps[rows] / mu
-    out[:, 6:10], out[:, 10:13] = q[rows, 0], omega[rows, 0]
-    out[:, 13:17], out[:, 17:20] = q[rows, 1], omega[rows, 1]
+                       ).reshape(nodes.size, n, 2, 4)
+    out[:, :, 0:3] = np.swapaxes(Rs[rows], 0, 1)
+    out[:, :, 3:6] = np.swapaxes(ps[rows], 0, 1) / mu[:, None]
+    out[:, :, 6:10] = np.swapaxes(q[rows, :, 0], 0, 1)
+    out[:, :, 10:13] = np.swapaxes(omega[rows, :, 0], 0, 1)
+    out[:, :, 13:17] = np.swapaxes(q[rows, :, 1], 0, 1)
+    out[:, :, 17:20] = np.swapaxes(omega[rows, :, 1], 0, 1)
     return out
 
 
