@@ -42,6 +42,20 @@ from attitude.model.state import format_epoch
 
 __all__ = ["INVERSION", "InversionRun", "load_inversion", "run_inversion", "is_inversion"]
 
+#: ``[inversion.start]``: a tumbler's starting state (the parameters of API "Fitting").
+START = Table("start", (
+    Key("angular_momentum_ra", "quantity", unit="rad", required=True,
+        doc="longitude of L (ecliptic, as the lightcurves' vectors)"),
+    Key("angular_momentum_dec", "quantity", unit="rad", required=True, doc="latitude of L"),
+    Key("energy_ratio", "number", required=True, positive=True, doc="E/E0"),
+    Key("ratio_a", "number", required=True, positive=True, doc="A/C"),
+    Key("ratio_b", "number", required=True, positive=True, doc="B/C"),
+    Key("precession_period", "quantity", unit="s", required=True, positive=True,
+        doc="P_phi"),
+    Key("phi0", "quantity", unit="rad", required=True, doc="precession angle at the start"),
+    Key("psi0", "quantity", unit="rad", required=True, doc="rotation angle at the start"),
+))
+
 #: The ``[inversion]`` table.
 INVERSION = Table("inversion", (
     Key("lightcurves", "string", required=True,
@@ -50,10 +64,14 @@ INVERSION = Table("inversion", (
     Key("format", "string", default="damit", choices=("damit",), doc="file format"),
     Key("time_scale", "string", default="utc", choices=("utc", "tt", "tdb"),
         doc="time scale of the file's Julian dates"),
-    Key("rotation", "string", default="auto", choices=("auto", "principal"),
-        doc="the rotation fitted (the tumbling inversion is coming)"),
-    Key("period", "quantity", unit="s", shape=((), (2,)), positive=True, required=True,
-        doc="sidereal period, or [min, max] to scan"),
+    Key("rotation", "string", default="auto", choices=("auto", "principal", "tumbling"),
+        doc="the rotation fitted: a principal-axis spin, or a tumbler from [inversion.start]"),
+    Key("period", "quantity", unit="s", shape=((), (2,)), positive=True,
+        doc="sidereal period, or [min, max] to scan (required unless tumbling)"),
+    Key("start", "table", table=START,
+        doc="tumbling: the starting state, the eight parameters of the tumbler model"),
+    Key("alternatives", "boolean", default=True,
+        doc="tumbling: also fit the other mode and the mirror L"),
     Key("poles", "integer", default=10, bounds=(1, None), doc="pole starts"),
     Key("rows", "integer", default=8, bounds=(2, 30),
         doc="rows per octant of the Gaussian image (8 rows^2 facets)"),
@@ -224,9 +242,18 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
     except AttitudeError as err:
         raise ScenarioError(err.reason, path=err.path or data,
                             key=err.key or "inversion.lightcurves") from None
-    result = invert(observations, cfg["rotation"], period=cfg["period"],
+    tumbling = cfg["rotation"] == "tumbling"
+    if tumbling and "start" not in cfg:
+        raise ScenarioError("a tumbling inversion needs its starting state: the table "
+                            "[inversion.start] (docs/inversion.md)", path=scenario.path,
+                            key="inversion.start")
+    if not tumbling and cfg.get("period") is None:
+        raise ScenarioError("give the sidereal period, or [min, max] to scan",
+                            path=scenario.path, key="inversion.period")
+    result = invert(observations, cfg["rotation"], period=cfg.get("period"),
                     poles=cfg["poles"], rows=cfg["rows"], degree=cfg["degree"],
-                    convexity=cfg["convexity"], max_iterations=cfg["max_iterations"])
+                    convexity=cfg["convexity"], max_iterations=cfg["max_iterations"],
+                    start=cfg.get("start"), alternatives=cfg["alternatives"])
     checks = _checks(scenario.expect, result)
     outputs = []
     if write_outputs:
@@ -286,8 +313,10 @@ def _write(stem: Path, scenario, result: InversionResult, observations) -> list[
         f'name = "{scenario.name} (inverted)"',
         "",
         "[body]",
-        f'shape = "{shape_path.name}"',
-        'density = "1 kg/m3"',
+        *([f'shape = "{shape_path.name}"', 'density = "1 kg/m3"']
+          if result.regime == "PA-short" else
+          ["principal_moments = [" + ", ".join(repr(float(x)) for x in np.diag(
+              result.body.inertia)) + "]   # the fitted moments, not the shape's"]),
         "",
         "[state]",
         f'epoch = "{format_epoch(state.epoch)}"',
