@@ -68,7 +68,8 @@ from attitude.photometry.geometry import Geometry
 from attitude.propagation.torquefree import free_rotation
 
 __all__ = ["PARAMETERS", "TumblerFit", "to_internal", "to_physical", "tumbler_directions",
-           "fit_tumbler", "energy_for_period_ratio",
+           "fit_tumbler", "energy_for_period_ratio", "COMBINATIONS", "RATIO_GRID",
+           "period_pairs", "tumbler_starts", "rank_starts",
            "shape_moment_ratios"]
 
 #: The rotation parameters, in the order of the fit's vectors.
@@ -510,3 +511,126 @@ def energy_for_period_ratio(ratio_a, ratio_b, period_ratio, regime: str) -> np.n
     v[..., 2] = x
     er = to_physical(v, regime)[..., 2]
     return np.where(reach, er, np.nan)
+
+
+#: Lightcurve frequencies ``n1 f_phi + n2 f_psi`` read as a fundamental of
+#: :func:`attitude.photometry.fit_periods`, most likely first (Pravec et al. 2005: the
+#: strongest is often ``2 f_phi - 2 f_psi`` or ``2 f_phi + 2 f_psi``).
+COMBINATIONS = ((2, -2), (2, 2), (1, -1), (1, 1), (0, 2), (0, 1), (2, -1), (2, 1))
+
+#: Moment ratios ``(A/C, B/C)`` of the coarse grid of starts.
+RATIO_GRID = ((0.55, 0.85), (0.7, 0.92), (0.5, 0.75))
+
+
+def period_pairs(periods) -> list[tuple[float, float]]:
+    """Candidate ``(P_phi, P_psi)`` from the two fundamental periods of a tumbler's
+    lightcurve: one of them is ``P_phi`` (or both are combinations), the other
+    ``1 / (n1 / P_phi + n2 / P_psi)`` for the :data:`COMBINATIONS`; only pairs with
+    ``P_psi > P_phi`` (every mode of a triaxial body has them, as :func:`energy_for_
+    period_ratio` finds).
+
+    Examples
+    --------
+    >>> [(round(a / 3600, 3), round(b / 3600, 2)) for a, b in period_pairs(
+    ...     [4.0 * 3600, 2.4636 * 3600])][:2]
+    [(4.0, 21.26), (4.0, 6.41)]
+    """
+    p = np.asarray(periods, dtype=float).ravel()
+    if p.size != 2 or not np.all(p > 0):
+        raise PhotometryError(f"expected two positive periods, got {p!r}", key="periods")
+    pairs = []
+    for phi, other in ((p[0], p[1]), (p[1], p[0])):
+        for n1, n2 in COMBINATIONS:
+            f_psi = (1.0 / other - n1 / phi) / n2
+            if f_psi > 0.0 and 1.0 / f_psi > phi * (1 + 1e-9):
+                pair = (float(phi), float(1.0 / f_psi))
+                if all(abs(pair[1] / q[1] - 1) > 1e-6 or abs(pair[0] / q[0] - 1) > 1e-6
+                       for q in pairs):
+                    pairs.append(pair)
+    return pairs
+
+
+def tumbler_starts(pairs, *, ratios=RATIO_GRID, directions: int = 8, phases: int = 4
+                   ) -> list[tuple[np.ndarray, str]]:
+    """Starting states for period pairs: for each ``(P_phi, P_psi)``, each mode and each
+    ``(A/C, B/C)`` of ``ratios``, the energy that gives ``P_psi / P_phi``
+    (:func:`energy_for_period_ratio`), L along ``directions`` directions over the
+    sphere and ``phases`` values each of ``phi0`` and ``psi0``.
+
+    Returns
+    -------
+    list of ((m, 8) array, regime)
+        Physical parameter rows, grouped by mode.
+
+    Examples
+    --------
+    >>> starts = tumbler_starts([(4.0 * 3600, 21.33 * 3600)], directions=2, phases=2)
+    >>> [(rows.shape, regime) for rows, regime in starts]
+    [((16, 8), 'SAM'), ((24, 8), 'LAM')]
+    """
+    k = np.arange(directions) + 0.5
+    dec = np.arcsin(1.0 - 2.0 * k / directions)
+    ra = (np.pi * (3.0 - np.sqrt(5.0)) * np.arange(directions)) % (2.0 * np.pi)
+    angles = 2.0 * np.pi * np.arange(phases) / phases
+    out = []
+    for regime in ("SAM", "LAM"):
+        rows = []
+        for p_phi, p_psi in pairs:
+            a, b = np.array(ratios, dtype=float).T
+            er = energy_for_period_ratio(a, b, p_psi / p_phi, regime)
+            for j in np.nonzero(np.isfinite(er))[0]:
+                grid = np.stack(np.meshgrid(np.arange(directions), angles, angles,
+                                            indexing="ij"), -1).reshape(-1, 3)
+                i = grid[:, 0].astype(int)
+                rows.append(np.stack([ra[i], dec[i], np.full(i.size, er[j]),
+                                      np.full(i.size, a[j]), np.full(i.size, b[j]),
+                                      np.full(i.size, p_phi), grid[:, 1], grid[:, 2]],
+                                     axis=1))
+        if rows:
+            out.append((np.concatenate(rows), regime))
+    return out
+
+
+def rank_starts(model: ConvexModel, starts, regime: str, *, max_iterations: int = 5,
+                chunk: int = 64) -> np.ndarray:
+    """chi2 of the best shape (rotation fixed, a few iterations) at each start's
+    attitude history: the cost of a start, to choose the few worth a full fit.
+
+    Parameters
+    ----------
+    model : ConvexModel
+        Usually a coarse one (few facets, a low degree): only the ranking counts.
+    starts : (m, 8) array
+        Physical parameter rows.
+    regime : str
+        Their mode (for the record: the attitude does not depend on it).
+    max_iterations : int
+        Iterations of each shape fit.
+    chunk : int
+        Attitude histories computed together.
+
+    Returns
+    -------
+    (m,) array
+
+    Examples
+    --------
+    >>> model = example_model()
+    >>> y = model.brightness_of(EXAMPLE_SHAPE, *tumbler_directions(model, EXAMPLE_STATE))
+    >>> model = with_brightness(model, y)
+    >>> rows = np.array([EXAMPLE_STATE, EXAMPLE_STATE])
+    >>> rows[1, 6] += 0.5                                  # phi0 off by 0.5 rad
+    >>> chi2 = rank_starts(model, rows, "SAM")
+    >>> bool(chi2[0] < 1e-6 < chi2[1])
+    True
+    """
+    _mode(regime)
+    rows = np.atleast_2d(np.asarray(starts, dtype=float))
+    chi2 = np.empty(rows.shape[0])
+    for first in range(0, rows.shape[0], chunk):
+        o_all, s_all = tumbler_directions(model, rows[first:first + chunk])
+        for i, (o, s) in enumerate(zip(o_all, s_all)):
+            fit = fit_shape_rotation(model, lambda r, o=o, s=s: (o, s),
+                                     max_iterations=max_iterations)
+            chi2[first + i] = fit.chi2
+    return chi2
