@@ -65,11 +65,12 @@ from attitude.inversion.observations import ObservedLightcurve
 from attitude.model.freebody import diagnose_many
 from attitude.model.sampling import tumbling_state
 from attitude.photometry.geometry import Geometry
+from attitude.photometry.periods import fit_periods
 from attitude.propagation.torquefree import free_rotation
 
 __all__ = ["PARAMETERS", "TumblerFit", "to_internal", "to_physical", "tumbler_directions",
            "fit_tumbler", "energy_for_period_ratio", "COMBINATIONS", "RATIO_GRID",
-           "period_pairs", "tumbler_starts", "rank_starts",
+           "period_pairs", "tumbler_starts", "rank_starts", "search_tumbler",
            "shape_moment_ratios"]
 
 #: The rotation parameters, in the order of the fit's vectors.
@@ -634,3 +635,57 @@ def rank_starts(model: ConvexModel, starts, regime: str, *, max_iterations: int 
                                      max_iterations=max_iterations)
             chi2[first + i] = fit.chi2
     return chi2
+
+
+def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
+                   directions: int = 8, phases: int = 4, polish: int = 2, keep: int = 3,
+                   coarse=(3, 2), max_iterations: int = 40) -> list[TumblerFit]:
+    """Tumbler fits from the data alone, best first.
+
+    1. The two fundamental periods (``periods``, else :func:`attitude.photometry.
+       fit_periods` of the data, one magnitude offset per lightcurve);
+    2. the candidate ``(P_phi, P_psi)`` (:func:`period_pairs`) and their starts
+       (:func:`tumbler_starts`), grouped by pair, mode and moment ratios;
+    3. in each group the ``polish`` starts of lowest chi2 (:func:`rank_starts`, on a
+       coarse Gaussian image of ``coarse = (rows, degree)``) refined by a short fit on
+       that coarse image;
+    4. the ``keep`` best of those fitted on the full model (:func:`fit_tumbler`).
+
+    Returns
+    -------
+    list of TumblerFit
+        Sorted by chi2; the first is the solution, the others the alternatives.
+
+    Examples
+    --------
+    See ``docs/inversion.md`` (a run takes a minute or more: about two thousand starts
+    are ranked).
+
+    >>> search_tumbler.__name__
+    'search_tumbler'
+    """
+    if periods is None:
+        magnitudes = -2.5 * np.log10(model.data)
+        sigma = 2.5 / np.log(10.0) * model.sigma / model.data
+        periods = fit_periods(model.time, magnitudes, sigma, n_periods=2,
+                              sessions=model.block).periods
+    pairs = period_pairs(periods)
+    rough = ConvexModel(list(model.observations), GaussianImage(*coarse), t0=model.t0)
+    half = phases // 2 if phases > 1 else 1
+    candidates = []
+    for p_phi, p_psi in pairs:
+        for a, b in ratios:
+            for rows, regime in tumbler_starts([(p_phi, p_psi)], ratios=[(a, b)],
+                                               directions=directions, phases=phases):
+                # psi0 and psi0 + pi differ little for a nearly symmetric coarse shape
+                rows = rows[rows[:, 7] < np.pi - 1e-9] if half > 1 else rows
+                chi2 = rank_starts(rough, rows, regime)
+                for i in np.argsort(chi2)[:polish]:
+                    fit = fit_tumbler(rough, rows[i], regime=regime, continuation=(),
+                                      max_iterations=15)
+                    candidates.append((fit.chi2, fit))
+    candidates.sort(key=lambda c: c[0])
+    fits = [fit_tumbler(model, [fit.parameters[k] for k in PARAMETERS],
+                        regime=fit.regime, max_iterations=max_iterations)
+            for _, fit in candidates[:keep]]
+    return sorted(fits, key=lambda f: f.chi2)
