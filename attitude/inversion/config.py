@@ -65,11 +65,12 @@ INVERSION = Table("inversion", (
     Key("time_scale", "string", default="utc", choices=("utc", "tt", "tdb"),
         doc="time scale of the file's Julian dates"),
     Key("rotation", "string", default="auto", choices=("auto", "principal", "tumbling"),
-        doc="the rotation fitted: a principal-axis spin, or a tumbler from [inversion.start]"),
+        doc="the rotation fitted: a principal-axis spin, or a tumbler"),
     Key("period", "quantity", unit="s", shape=((), (2,)), positive=True,
-        doc="sidereal period, or [min, max] to scan (required unless tumbling)"),
+        doc="sidereal period, or [min, max] to scan (required unless tumbling; "
+            "tumbling: the two fundamental periods, optional)"),
     Key("start", "table", table=START,
-        doc="tumbling: the starting state, the eight parameters of the tumbler model"),
+        doc="tumbling: the starting state (without it, the search from the data)"),
     Key("alternatives", "boolean", default=True,
         doc="tumbling: also fit the other mode and the mirror L"),
     Key("poles", "integer", default=10, bounds=(1, None), doc="pole starts"),
@@ -242,12 +243,7 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
     except AttitudeError as err:
         raise ScenarioError(err.reason, path=err.path or data,
                             key=err.key or "inversion.lightcurves") from None
-    tumbling = cfg["rotation"] == "tumbling"
-    if tumbling and "start" not in cfg:
-        raise ScenarioError("a tumbling inversion needs its starting state: the table "
-                            "[inversion.start] (docs/inversion.md)", path=scenario.path,
-                            key="inversion.start")
-    if not tumbling and cfg.get("period") is None:
+    if cfg["rotation"] != "tumbling" and cfg.get("period") is None:
         raise ScenarioError("give the sidereal period, or [min, max] to scan",
                             path=scenario.path, key="inversion.period")
     result = invert(observations, cfg["rotation"], period=cfg.get("period"),

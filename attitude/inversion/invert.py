@@ -36,6 +36,7 @@ from attitude.inversion.tumbler import (
     energy_for_period_ratio,
     example_model,
     fit_tumbler,
+    search_tumbler,
     tumbler_directions,
 )
 from attitude.model.body import RigidBody
@@ -226,9 +227,13 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     period : float, Quantity or (min, max)
         Sidereal period (s), or a range to scan (:func:`period_scan`).  Required for a
         principal-axis rotator.
+        Tumbling: optional, the two fundamental periods of the lightcurve (s; default
+        from :func:`~attitude.photometry.fit_periods`) when there is no ``start``.
     start : dict, TumblerFit or InversionResult, optional
         Tumbling only: the starting state, the eight parameters of
-        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s) or an earlier fit.
+        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s) or an earlier fit;
+        without it the state is searched from the data alone
+        (:func:`~attitude.inversion.tumbler.search_tumbler`, a minute or more).
     alternatives : bool
         Tumbling only: also fit the other mode (SAM/LAM, at the same period ratio) and the
         mirror L, and report their chi2.
@@ -272,7 +277,7 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
                               "or 'tumbling'", key="rotation")
     observations = list(observations)
     if rotation == "tumbling":
-        return _invert_tumbling(observations, start, rows=rows, degree=degree,
+        return _invert_tumbling(observations, start, period, rows=rows, degree=degree,
                                 convexity=convexity, max_iterations=max_iterations,
                                 alternatives=alternatives)
     if period is None:
@@ -362,10 +367,6 @@ def _start_parameters(start) -> np.ndarray:
         start = start.fit
     if isinstance(start, TumblerFit):
         start = start.parameters
-    if start is None:
-        raise PhotometryError("a tumbling inversion needs a start: the eight parameters "
-                              f"{', '.join(PARAMETERS)} (SI) or an earlier result",
-                              key="start")
     if isinstance(start, dict):
         missing = [k for k in PARAMETERS if k not in start]
         if missing:
@@ -393,18 +394,28 @@ def _other_mode(p: np.ndarray, regime: str):
     return q, other
 
 
-def _invert_tumbling(observations, start, *, rows, degree, convexity, max_iterations,
-                     alternatives) -> InversionResult:
+def _invert_tumbling(observations, start, periods, *, rows, degree, convexity,
+                     max_iterations, alternatives) -> InversionResult:
     """:func:`invert` for ``rotation="tumbling"``."""
-    p0 = _start_parameters(start)
     model = ConvexModel(observations, GaussianImage(rows, degree))
     n_parameters = model.image.n_coefficients + 8
     if model.n_points <= n_parameters:
         raise PhotometryError(f"{model.n_points} points for {n_parameters} parameters: "
                               "more data, or a lower degree", key="observations")
-    best = fit_tumbler(model, p0, convexity=convexity, max_iterations=max_iterations)
     others = []
-    if alternatives:
+    if start is None:
+        if periods is not None:
+            periods = np.atleast_1d(to_si(periods, "s", name="period", error=PhotometryError))
+        fits = search_tumbler(model, periods, max_iterations=max_iterations)
+        best = fits[0]
+        others = [(f, "{} P_phi {:.6g} h, P_psi {:.6g} h, L ({:.1f}, {:.1f}) deg".format(
+            f.regime, f.periods["precession"] / 3600, f.periods["rotation"] / 3600,
+            *f.pole)) for f in fits[1:]]
+    else:
+        best = fit_tumbler(model, _start_parameters(start), convexity=convexity,
+                           max_iterations=max_iterations)
+    if alternatives and start is not None:
+        p0 = _start_parameters(start)
         other, mode = _other_mode(p0, best.regime)
         if other is not None:
             fit = fit_tumbler(model, other, regime=mode, convexity=convexity,
