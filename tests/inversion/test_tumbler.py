@@ -21,7 +21,8 @@ import attitude as att
 from attitude.foundations.errors import PhotometryError
 from attitude.inversion import ConvexModel, GaussianImage, ObservedLightcurve
 from attitude.inversion import tumbler as tb
-from attitude.inversion.config import load_inversion
+from attitude.inversion.config import load_inversion, run_inversion
+from attitude.inversion.invert import _example_tumbler
 from attitude.model.freebody import diagnose_many
 from attitude.model.sampling import tumbling_state
 from attitude.model.state import AttitudeState
@@ -245,3 +246,30 @@ def test_short_period_tumbler_from_the_data_alone():
     assert res.regime == "SAM"
     assert abs(res.period / truth[5] - 1) < 0.01
     assert angle_between(res.pole, np.degrees(truth[:2])) < 10.0
+
+
+def test_scenario_runs_a_tumbler(tmp_path):
+    """`attitude invert` of a tumbling scenario: the DAMIT file of the example tumbler,
+    its start, the outputs (a state file with the fitted moments)."""
+    obs, truth = _example_tumbler()
+    lines = [str(len(obs))]
+    for o in obs:
+        sun, seen = o.sun_and_observer()
+        lines.append(f"{len(o)} 0")
+        lines += [" ".join(repr(float(x)) for x in (jd, y, *s, *v))
+                  for jd, y, s, v in zip(o.times.tdb.jd, o.brightness, sun, seen)]
+    (tmp_path / "lcs").write_text("\n".join(lines) + "\n")
+    start = "\n".join(f"{k} = {float(v)!r}" for k, v in zip(tb.PARAMETERS, truth * [
+        1, 1, 1.001, 1, 1, 1.0005, 1, 1]))
+    (tmp_path / "t.toml").write_text(
+        '[scenario]\nname = "t"\n[inversion]\nlightcurves = "lcs"\ntime_scale = "tdb"\n'
+        'rotation = "tumbling"\nrows = 4\ndegree = 2\nalternatives = false\n'
+        f"[inversion.start]\n{start}\n"
+        '[expect]\nperiod = { value = 2.0, unit = "h", rel_tol = 1e-6 }\n'
+        "rms = { max = 1e-6 }\n")
+    run = run_inversion(load_inversion(tmp_path / "t.toml"))
+    assert run.ok, run.expect
+    assert [p.name for p in run.outputs] == ["t_shape.obj", "t_state.toml",
+                                             "t_lightcurves.csv"]
+    text = (tmp_path / "t_state.toml").read_text()
+    assert "principal_moments = [" in text and "shape =" not in text
