@@ -286,6 +286,20 @@ def _angle(a, b) -> float:
     return math.degrees(math.acos(min(1.0, max(-1.0, c))))
 
 
+def _tumbler_comment(result: InversionResult) -> list[str]:
+    """The state file's header for a tumbler: L, both periods, the homogeneity test."""
+    fit, (lon, lat) = result.fit, result.pole
+    p, e = fit.parameters, fit.uncertainties
+    return [f"# {result.regime} tumbler: L ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, "
+            f"P_phi {fit.periods['precession'] / 3600:.9g} h, P_psi "
+            f"{fit.periods['rotation'] / 3600:.9g} h, rms {result.rms:.4g}",
+            f"# E/E0 {p['energy_ratio']:.6g} +- {e['energy_ratio']:.2g}, A/C "
+            f"{p['ratio_a']:.5g} +- {e['ratio_a']:.2g}, B/C {p['ratio_b']:.5g} +- "
+            f"{e['ratio_b']:.2g}; the convex shape at uniform density has A/C "
+            f"{fit.shape_ratios[0]:.5g}, B/C {fit.shape_ratios[1]:.5g}",
+            f"# (axes {result.spin_axis_tilt:.2f} deg apart): the homogeneity test."]
+
+
 def _write(stem: Path, scenario, result: InversionResult, observations) -> list[Path]:
     shape_path = Path(f"{stem}_shape.obj")
     state_path = Path(f"{stem}_state.toml")
@@ -296,10 +310,11 @@ def _write(stem: Path, scenario, result: InversionResult, observations) -> list[
                f"rms {result.rms:.4g}; unit volume (relative photometry carries no size)")
     state_text = "\n".join([
         f"# The rotation state inverted by `attitude invert {scenario.path.name}`:",
-        f"# pole ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, sidereal period "
-        f"{result.period / 3600.0:.9g} h, rms {result.rms:.4g}, dark facet "
-        f"{100 * result.dark_facet:.2f} %; spin axis {result.spin_axis_tilt:.2f} deg from "
-        "the axis of largest inertia at uniform density.",
+        *([f"# pole ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, sidereal period "
+           f"{result.period / 3600.0:.9g} h, rms {result.rms:.4g}, dark facet "
+           f"{100 * result.dark_facet:.2f} %; spin axis {result.spin_axis_tilt:.2f} deg "
+           "from the axis of largest inertia at uniform density."]
+          if result.regime == "PA-short" else _tumbler_comment(result)),
         *(f"# alternative: {text}, chi2 {chi2:.6g} (best {result.chi2:.6g})"
           for chi2, text in result.alternatives),
         "# The shape is the convex model at unit volume and an arbitrary uniform density:",
