@@ -42,6 +42,20 @@ from attitude.model.state import format_epoch
 
 __all__ = ["INVERSION", "InversionRun", "load_inversion", "run_inversion", "is_inversion"]
 
+#: ``[inversion.start]``: a tumbler's starting state (the parameters of API "Fitting").
+START = Table("start", (
+    Key("angular_momentum_ra", "quantity", unit="rad", required=True,
+        doc="longitude of L (ecliptic, as the lightcurves' vectors)"),
+    Key("angular_momentum_dec", "quantity", unit="rad", required=True, doc="latitude of L"),
+    Key("energy_ratio", "number", required=True, positive=True, doc="E/E0"),
+    Key("ratio_a", "number", required=True, positive=True, doc="A/C"),
+    Key("ratio_b", "number", required=True, positive=True, doc="B/C"),
+    Key("precession_period", "quantity", unit="s", required=True, positive=True,
+        doc="P_phi"),
+    Key("phi0", "quantity", unit="rad", required=True, doc="precession angle at the start"),
+    Key("psi0", "quantity", unit="rad", required=True, doc="rotation angle at the start"),
+))
+
 #: The ``[inversion]`` table.
 INVERSION = Table("inversion", (
     Key("lightcurves", "string", required=True,
@@ -50,10 +64,15 @@ INVERSION = Table("inversion", (
     Key("format", "string", default="damit", choices=("damit",), doc="file format"),
     Key("time_scale", "string", default="utc", choices=("utc", "tt", "tdb"),
         doc="time scale of the file's Julian dates"),
-    Key("rotation", "string", default="auto", choices=("auto", "principal"),
-        doc="the rotation fitted (the tumbling inversion is coming)"),
-    Key("period", "quantity", unit="s", shape=((), (2,)), positive=True, required=True,
-        doc="sidereal period, or [min, max] to scan"),
+    Key("rotation", "string", default="auto", choices=("auto", "principal", "tumbling"),
+        doc="the rotation fitted: a principal-axis spin, or a tumbler"),
+    Key("period", "quantity", unit="s", shape=((), (2,)), positive=True,
+        doc="sidereal period, or [min, max] to scan (required unless tumbling; "
+            "tumbling: the two fundamental periods, optional)"),
+    Key("start", "table", table=START,
+        doc="tumbling: the starting state (without it, the search from the data)"),
+    Key("alternatives", "boolean", default=True,
+        doc="tumbling: also fit the other mode and the mirror L"),
     Key("poles", "integer", default=10, bounds=(1, None), doc="pole starts"),
     Key("rows", "integer", default=8, bounds=(2, 30),
         doc="rows per octant of the Gaussian image (8 rows^2 facets)"),
@@ -224,9 +243,13 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
     except AttitudeError as err:
         raise ScenarioError(err.reason, path=err.path or data,
                             key=err.key or "inversion.lightcurves") from None
-    result = invert(observations, cfg["rotation"], period=cfg["period"],
+    if cfg["rotation"] != "tumbling" and cfg.get("period") is None:
+        raise ScenarioError("give the sidereal period, or [min, max] to scan",
+                            path=scenario.path, key="inversion.period")
+    result = invert(observations, cfg["rotation"], period=cfg.get("period"),
                     poles=cfg["poles"], rows=cfg["rows"], degree=cfg["degree"],
-                    convexity=cfg["convexity"], max_iterations=cfg["max_iterations"])
+                    convexity=cfg["convexity"], max_iterations=cfg["max_iterations"],
+                    start=cfg.get("start"), alternatives=cfg["alternatives"])
     checks = _checks(scenario.expect, result)
     outputs = []
     if write_outputs:
@@ -263,6 +286,20 @@ def _angle(a, b) -> float:
     return math.degrees(math.acos(min(1.0, max(-1.0, c))))
 
 
+def _tumbler_comment(result: InversionResult) -> list[str]:
+    """The state file's header for a tumbler: L, both periods, the homogeneity test."""
+    fit, (lon, lat) = result.fit, result.pole
+    p, e = fit.parameters, fit.uncertainties
+    return [f"# {result.regime} tumbler: L ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, "
+            f"P_phi {fit.periods['precession'] / 3600:.9g} h, P_psi "
+            f"{fit.periods['rotation'] / 3600:.9g} h, rms {result.rms:.4g}",
+            f"# E/E0 {p['energy_ratio']:.6g} +- {e['energy_ratio']:.2g}, A/C "
+            f"{p['ratio_a']:.5g} +- {e['ratio_a']:.2g}, B/C {p['ratio_b']:.5g} +- "
+            f"{e['ratio_b']:.2g}; the convex shape at uniform density has A/C "
+            f"{fit.shape_ratios[0]:.5g}, B/C {fit.shape_ratios[1]:.5g}",
+            f"# (axes {result.spin_axis_tilt:.2f} deg apart): the homogeneity test."]
+
+
 def _write(stem: Path, scenario, result: InversionResult, observations) -> list[Path]:
     shape_path = Path(f"{stem}_shape.obj")
     state_path = Path(f"{stem}_state.toml")
@@ -273,10 +310,11 @@ def _write(stem: Path, scenario, result: InversionResult, observations) -> list[
                f"rms {result.rms:.4g}; unit volume (relative photometry carries no size)")
     state_text = "\n".join([
         f"# The rotation state inverted by `attitude invert {scenario.path.name}`:",
-        f"# pole ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, sidereal period "
-        f"{result.period / 3600.0:.9g} h, rms {result.rms:.4g}, dark facet "
-        f"{100 * result.dark_facet:.2f} %; spin axis {result.spin_axis_tilt:.2f} deg from "
-        "the axis of largest inertia at uniform density.",
+        *([f"# pole ({lon:.3f}, {lat:.3f}) deg ecliptic J2000, sidereal period "
+           f"{result.period / 3600.0:.9g} h, rms {result.rms:.4g}, dark facet "
+           f"{100 * result.dark_facet:.2f} %; spin axis {result.spin_axis_tilt:.2f} deg "
+           "from the axis of largest inertia at uniform density."]
+          if result.regime == "PA-short" else _tumbler_comment(result)),
         *(f"# alternative: {text}, chi2 {chi2:.6g} (best {result.chi2:.6g})"
           for chi2, text in result.alternatives),
         "# The shape is the convex model at unit volume and an arbitrary uniform density:",
@@ -286,8 +324,10 @@ def _write(stem: Path, scenario, result: InversionResult, observations) -> list[
         f'name = "{scenario.name} (inverted)"',
         "",
         "[body]",
-        f'shape = "{shape_path.name}"',
-        'density = "1 kg/m3"',
+        *([f'shape = "{shape_path.name}"', 'density = "1 kg/m3"']
+          if result.regime == "PA-short" else
+          ["principal_moments = [" + ", ".join(repr(float(x)) for x in np.diag(
+              result.body.inertia)) + "]   # the fitted moments, not the shape's"]),
         "",
         "[state]",
         f'epoch = "{format_epoch(state.epoch)}"',

@@ -33,7 +33,8 @@ from scipy.optimize import least_squares
 from attitude.foundations.errors import PhotometryError
 from attitude.inversion.gaussian_image import GaussianImage
 
-__all__ = ["ConvexModel", "ConvexFit", "fit_convex", "spin_to_body"]
+__all__ = ["ConvexModel", "ConvexFit", "ShapeFit", "fit_convex", "fit_shape_rotation",
+           "difference_columns", "spin_to_body"]
 
 
 def spin_to_body(longitude, latitude, period, t, phi0, vectors) -> np.ndarray:
@@ -147,10 +148,16 @@ class ConvexModel:
         """``mu = n_j . o`` and ``mu0 = n_j . s`` per point and facet (``(n, F)``, clamped at
         zero) and the body-frame observer and Sun directions (``(n, 3)``)."""
         o, s = self.directions(longitude, latitude, period)
-        normals_t = self.image.normals.T
-        mu = np.maximum(o @ normals_t, 0.0)
-        mu0 = np.maximum(s @ normals_t, 0.0)
+        mu, mu0 = self.cosines_of(o, s)
         return mu, mu0, o, s
+
+    def cosines_of(self, observer, sun):
+        """``mu = n_j . o`` and ``mu0 = n_j . s`` (``(n, F)``, clamped at zero) for
+        body-frame observer and Sun directions (``(n, 3)`` each) from any attitude
+        history: the spin of :meth:`directions` or a tumbler's
+        (:mod:`attitude.inversion.tumbler`)."""
+        normals_t = self.image.normals.T
+        return np.maximum(observer @ normals_t, 0.0), np.maximum(sun @ normals_t, 0.0)
 
     @staticmethod
     def law(mu, mu0, lambert):
@@ -214,7 +221,15 @@ class ConvexModel:
         lambert : float
             Weight ``c`` of the Lambert part.
         """
-        law = self.scattering(longitude, latitude, period, lambert)
+        o, s = self.directions(longitude, latitude, period)
+        return self.brightness_of(coefficients, o, s, phase=phase, lambert=lambert)
+
+    def brightness_of(self, coefficients, observer, sun, *, phase=(0.0, 0.1, 0.0),
+                      lambert=0.1):
+        """The model brightness ``f(alpha) sum_j A_j S_ij``, ``(n,)``, for body-frame
+        observer and Sun directions (``(n, 3)`` each) from any attitude history: the one
+        brightness formula of the spin (:meth:`brightness`) and tumbler models."""
+        law = self.law(*self.cosines_of(observer, sun), lambert)
         return self.phase_function(*phase) * (law @ self.image.areas(coefficients))
 
 
@@ -284,6 +299,247 @@ def _block_means(values, block, n_blocks):
     return (sums / counts[:, None])[block]
 
 
+@dataclass(frozen=True, eq=False)
+class ShapeFit:
+    """The result of :func:`fit_shape_rotation`: a convex shape fitted with the
+    parameters of any attitude history.
+
+    Attributes
+    ----------
+    coefficients : array
+        Harmonic coefficients of the log areas.
+    areas : (F,) array
+        Facet areas of the Gaussian image.
+    rotation : (k,) array
+        The rotation parameters as fitted.
+    phase : tuple
+        ``(a, d, k)`` of the phase function.
+    lambert : float
+    chi2, rms, dark_facet : float
+        As in :class:`ConvexFit`.
+    model : (n,) array
+        The model brightness as compared.
+    jacobian : (n, p) array
+        d(weighted residual)/d(free parameter) of the data at the end: shape
+        coefficients first, then the rotation, then the phase function.
+    n_evaluations : int
+    status : str
+
+    Examples
+    --------
+    >>> fit = ShapeFit(np.zeros(1), np.ones(8), np.array([3600.0]), (0.0, 0.1, 0.0), 0.1,
+    ...                0.0, 0.0, 0.0, np.ones(3), np.zeros((3, 1)), 1, "done")
+    >>> fit.rotation.tolist()
+    [3600.0]
+    """
+
+    coefficients: np.ndarray
+    areas: np.ndarray
+    rotation: np.ndarray
+    phase: tuple
+    lambert: float
+    chi2: float
+    rms: float
+    dark_facet: float
+    model: np.ndarray
+    jacobian: np.ndarray
+    n_evaluations: int
+    status: str
+
+
+def difference_columns(directions, rotation, steps, grad_o, grad_s) -> np.ndarray:
+    """``d(sum_j A_j S_ij)/dr`` (``(n, k)``) by central differences of the body-frame
+    directions only: ``sum_j A_j (S_mu n_j . do/dr + S_mu0 n_j . ds/dr)``, with
+    ``grad_o = sum_j A_j S_mu n_j`` and ``grad_s`` likewise (``(n, 3)`` each).
+
+    Examples
+    --------
+    >>> turn = lambda r: (np.array([[np.cos(r[0]), np.sin(r[0]), 0.0]]),
+    ...                   np.array([[1.0, 0.0, 0.0]]))
+    >>> difference_columns(turn, np.array([0.0]), [1e-6], np.array([[0.0, 2.0, 0.0]]),
+    ...                    np.zeros((1, 3))).round(9).tolist()
+    [[2.0]]
+    """
+    r = np.asarray(rotation, dtype=float)
+    columns = np.empty((grad_o.shape[0], r.size))
+    for i, h in enumerate(np.broadcast_to(steps, r.shape)):
+        up, down = r.copy(), r.copy()
+        up[i] += h
+        down[i] -= h
+        (o_up, s_up), (o_dn, s_dn) = directions(up), directions(down)
+        columns[:, i] = (np.einsum("ij,ij->i", grad_o, o_up - o_dn)
+                         + np.einsum("ij,ij->i", grad_s, s_up - s_dn)) / (2.0 * h)
+    return columns
+
+
+def fit_shape_rotation(model: ConvexModel, directions, rotation=(), *, columns=None,
+                       bounds=None, coefficients=None, free_shape=True,
+                       phase=(0.0, 0.1, 0.0), free_phase=False, lambert=0.1,
+                       convexity=0.1, max_iterations=100, tolerance=1e-8) -> ShapeFit:
+    """Fit a convex shape with the parameters of any attitude history (damped least
+    squares; the engine of :func:`fit_convex` and of the tumbler inversion).
+
+    Parameters
+    ----------
+    model : ConvexModel
+        The data and the Gaussian image.
+    directions : callable
+        ``directions(r) -> (observer, sun)``: body-frame unit vectors (``(n, 3)`` each)
+        at the data points for rotation parameters ``r``.
+    rotation : (k,) array
+        Starting rotation parameters (``k = 0``: the attitude history is fixed).
+    columns : callable, optional
+        ``columns(r, observer, sun, grad_o, grad_s) -> (n, k)``: ``d(sum_j A_j S_ij)/dr``
+        (default: :func:`difference_columns` with steps ``1e-6 max(1, |r|)``).
+    bounds : (lower, upper), optional
+        Bounds of the rotation parameters (then the trust-region method, else
+        Levenberg-Marquardt).
+    coefficients : array, optional
+        Starting shape (default: the sphere).
+    free_shape : bool
+        Fit the shape (default) or keep ``coefficients``.
+    phase, free_phase, lambert, convexity, max_iterations, tolerance
+        As in :func:`fit_convex`.
+
+    Returns
+    -------
+    ShapeFit
+
+    Examples
+    --------
+    The shape alone, for a fixed attitude history (here a spin of 2 h):
+
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Geometry
+    >>> from attitude.inversion import ObservedLightcurve
+    >>> t = np.linspace(0.0, 8 * 3600.0, 60)
+    >>> obs = [ObservedLightcurve(Time("2026-01-01", scale="tdb"), t + 86400.0 * k,
+    ...                           np.ones(60), Geometry(sun=[1, 0.3 * k, 0.1],
+    ...                                                 observer=[1, 0.3 * k - 0.2, 0]))
+    ...        for k in range(3)]
+    >>> m = ConvexModel(obs, GaussianImage(rows=4, degree=2))
+    >>> truth = np.zeros(9); truth[8] = 0.4
+    >>> y = m.brightness(truth, 0.5, 1.0, 7200.0)
+    >>> m = ConvexModel([ObservedLightcurve(o.epoch, o.time, y[m.block == k], o.geometry)
+    ...                  for k, o in enumerate(obs)], m.image)
+    >>> spin = lambda r: m.directions(0.5, 1.0, 7200.0)
+    >>> fit = fit_shape_rotation(m, spin)
+    >>> bool(fit.rms < 1e-6), fit.rotation.size
+    (True, 0)
+    """
+    image = model.image
+    n_coef = image.n_coefficients
+    relative = ~model.calibrated[model.block]
+    all_relative = bool(relative.all())
+    n_blocks = len(model.calibrated)
+    c_start = np.zeros(n_coef) if coefficients is None else np.array(coefficients, float)
+    # the overall size is free only when a calibrated lightcurve fixes it
+    shape_index = (np.arange(1 if all_relative else 0, n_coef) if free_shape
+                   else np.arange(0))
+    r_start = np.atleast_1d(np.asarray(rotation, dtype=float))
+    n_shape, n_rot = shape_index.size, r_start.size
+    x0 = np.concatenate([c_start[shape_index], r_start,
+                         np.asarray(phase, float) if free_phase else []])
+    if columns is None:
+        def columns(r, o, s, grad_o, grad_s):
+            return difference_columns(directions, r, 1e-6 * np.maximum(1.0, np.abs(r)),
+                                      grad_o, grad_s)
+    means = _block_means(model.data, model.block, n_blocks)
+    data_rel = np.where(relative, model.data / means, model.data)
+    weight = 1.0 / np.where(relative, model.sigma / means, model.sigma)
+    reg = convexity * np.sqrt(model.n_points)
+
+    def unpack(x):
+        c = c_start.copy()
+        c[shape_index] = x[:n_shape]
+        r = x[n_shape:n_shape + n_rot]
+        ph = tuple(x[n_shape + n_rot:]) if free_phase else tuple(phase)
+        return c, r, ph
+
+    def compared(raw):
+        """The model as compared with the data (relative: over its lightcurve mean)."""
+        return np.where(relative, raw / _block_means(raw, model.block, n_blocks), raw)
+
+    cache = {}
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            c, r, ph = unpack(x)
+            o, s = directions(r)
+            mu, mu0 = model.cosines_of(o, s)
+            law = model.law(mu, mu0, lambert)
+            areas = image.areas(c)
+            f = model.phase_function(*ph)
+            raw = f * (law @ areas)
+            closing = areas @ image.normals / areas.sum()
+            cache[key] = (raw, law, areas, f, closing, mu, mu0, o, s)
+        return cache[key]
+
+    def residuals(x):
+        raw, _, _, _, closing = evaluate(x)[:5]
+        return np.concatenate([(data_rel - compared(raw)) * weight, reg * closing])
+
+    def jacobian(x):
+        c, r, ph = unpack(x)
+        raw, law, areas, f, closing, mu, mu0, o, s = evaluate(x)
+        blocks = []
+        # shape: dL/da_k = f sum_j S_ij A_j Y_jk
+        basis = image.basis[:, shape_index]
+        blocks.append(f[:, None] * (law @ (areas[:, None] * basis)))
+        if n_rot:
+            # rotation: dL/dr = f sum_j A_j (S_mu n_j . do/dr + S_mu0 n_j . ds/dr)
+            d_mu, d_mu0 = model.law_derivatives(mu, mu0, lambert)
+            grad_o = (d_mu * areas) @ image.normals             # (n, 3)
+            grad_s = (d_mu0 * areas) @ image.normals
+            blocks.append(f[:, None] * columns(r, o, s, grad_o, grad_s))
+        if free_phase:
+            a, d, _k = ph
+            e = np.exp(-model.alpha / d)
+            base = law @ areas
+            blocks.append(np.stack([e * base, a * e * model.alpha / d**2 * base,
+                                    model.alpha * base], axis=1))
+        d_raw = np.concatenate(blocks, axis=1)
+        # relative: d(L / <L>) = (dL - (L / <L>) d<L>) / <L>
+        mean = _block_means(raw, model.block, n_blocks)
+        d_mean = _block_means(d_raw, model.block, n_blocks)
+        d_cmp = np.where(relative[:, None], (d_raw - (raw / mean)[:, None] * d_mean)
+                         / mean[:, None], d_raw)
+        jac = -d_cmp * weight[:, None]
+        # convexity: d(sum A n / sum A)/da_k
+        total = areas.sum()
+        d_close = np.zeros((3, x.size))
+        d_close[:, :n_shape] = ((areas[:, None] * basis).T @ image.normals).T / total \
+            - np.outer(closing, areas @ basis) / total
+        return np.concatenate([jac, reg * d_close], axis=0)
+
+    if x0.size == 0:
+        n_evaluations, status, x_end = 1, "nothing to fit", x0
+    else:
+        if bounds is None:
+            kwargs = {"method": "lm"}
+        else:
+            lower = np.full(x0.size, -np.inf)
+            upper = np.full(x0.size, np.inf)
+            lower[n_shape:n_shape + n_rot], upper[n_shape:n_shape + n_rot] = bounds
+            x0 = np.clip(x0, lower, upper)
+            kwargs = {"method": "trf", "bounds": (lower, upper)}
+        result = least_squares(residuals, x0, jac=jacobian, x_scale="jac", ftol=tolerance,
+                               xtol=1e-12, gtol=1e-12, max_nfev=max_iterations, **kwargs)
+        n_evaluations, status, x_end = int(result.nfev), str(result.message), result.x
+    c, r, ph = unpack(x_end)
+    raw, _, areas, _, closing = evaluate(x_end)[:5]
+    resid = (data_rel - compared(raw)) * weight
+    chi2 = float(resid @ resid)
+    jac_end = jacobian(x_end)[:model.n_points] if x_end.size else np.zeros((resid.size, 0))
+    return ShapeFit(coefficients=c, areas=areas, rotation=np.array(r, dtype=float),
+                    phase=tuple(float(v) for v in ph), lambert=float(lambert), chi2=chi2,
+                    rms=float(np.sqrt(chi2 / model.n_points)),
+                    dark_facet=float(np.linalg.norm(closing)), model=compared(raw),
+                    jacobian=jac_end, n_evaluations=n_evaluations, status=status)
+
+
 def fit_convex(model: ConvexModel, longitude, latitude, period, *, coefficients=None,
                free_period=True, phase=(0.0, 0.1, 0.0), free_phase=False, lambert=0.1,
                convexity=0.1, max_iterations=100, tolerance=1e-8) -> ConvexFit:
@@ -338,120 +594,32 @@ def fit_convex(model: ConvexModel, longitude, latitude, period, *, coefficients=
     >>> bool(fit.rms < 1e-6), round(fit.period, 3)
     (True, 7200.0)
     """
-    image = model.image
-    n_coef = image.n_coefficients
-    relative = ~model.calibrated[model.block]
-    all_relative = bool(relative.all())
-    n_blocks = len(model.calibrated)
-    c_start = np.zeros(n_coef) if coefficients is None else np.array(coefficients, float)
-    # the overall size is free only when a calibrated lightcurve fixes it
-    shape_index = np.arange(1 if all_relative else 0, n_coef)
-    x0 = [c_start[shape_index], [longitude, latitude]]
-    if free_period:
-        x0.append([period])
-    if free_phase:
-        x0.append(list(phase))
-    x0 = np.concatenate(x0)
-    n_shape = shape_index.size
-    weight = 1.0 / model.sigma
-    data_rel = np.where(relative, model.data / _block_means(model.data, model.block,
-                                                           n_blocks), model.data)
-    sigma_rel = np.where(relative, model.sigma / _block_means(model.data, model.block,
-                                                             n_blocks), model.sigma)
-    weight = 1.0 / sigma_rel
-    reg = convexity * np.sqrt(model.n_points)
+    def directions(r):
+        return model.directions(r[0], r[1], r[2] if free_period else period)
 
-    def unpack(x):
-        c = c_start.copy()
-        c[shape_index] = x[:n_shape]
-        lon, lat = x[n_shape], x[n_shape + 1]
-        i = n_shape + 2
-        p = x[i] if free_period else period
-        i += 1 if free_period else 0
-        ph = tuple(x[i:i + 3]) if free_phase else tuple(phase)
-        return c, lon, lat, p, ph
+    def columns(r, o, s, grad_o, grad_s):
+        pole = difference_columns(lambda q: directions(np.concatenate([q, r[2:]])), r[:2],
+                                  1e-6, grad_o, grad_s)
+        if not free_period:
+            return pole
+        # d(R_z(-phi) w)/dphi = (y, -x, 0) of the body-frame vector; dphi/dP
+        dphi = -2.0 * np.pi * model.time / (r[2] * r[2])
+        rate = (grad_o[:, 0] * o[:, 1] - grad_o[:, 1] * o[:, 0]
+                + grad_s[:, 0] * s[:, 1] - grad_s[:, 1] * s[:, 0])
+        return np.concatenate([pole, (rate * dphi)[:, None]], axis=1)
 
-    def compared(raw):
-        """The model as compared with the data (relative: over its lightcurve mean)."""
-        return np.where(relative, raw / _block_means(raw, model.block, n_blocks), raw)
-
-    cache = {}
-
-    def evaluate(x):
-        key = x.tobytes()
-        if key not in cache:
-            cache.clear()
-            c, lon, lat, p, ph = unpack(x)
-            mu, mu0, o, s = model.cosines(lon, lat, p)
-            law = model.law(mu, mu0, lambert)
-            areas = image.areas(c)
-            f = model.phase_function(*ph)
-            raw = f * (law @ areas)
-            closing = areas @ image.normals / areas.sum()
-            cache[key] = (raw, law, areas, f, closing, mu, mu0, o, s)
-        return cache[key]
-
-    def residuals(x):
-        raw, _, _, _, closing = evaluate(x)[:5]
-        return np.concatenate([(data_rel - compared(raw)) * weight, reg * closing])
-
-    def jacobian(x):
-        c, lon, lat, p, ph = unpack(x)
-        raw, law, areas, f, closing, mu, mu0, o, s = evaluate(x)
-        d_mu, d_mu0 = model.law_derivatives(mu, mu0, lambert)
-        columns = []
-        # shape: dL/da_k = f sum_j S_ij A_j Y_jk
-        basis = image.basis[:, shape_index]
-        columns.append(f[:, None] * (law @ (areas[:, None] * basis)))
-        # pole and period: dL/dq = f sum_j A_j (S_mu n_j . do/dq + S_mu0 n_j . ds/dq)
-        grad_o = (d_mu * areas) @ image.normals             # (n, 3)
-        grad_s = (d_mu0 * areas) @ image.normals
-        h = 1e-6
-        for dlon, dlat in ((h, 0.0), (0.0, h)):             # the fixed rotations: cheap
-            o_up, s_up = model.directions(lon + dlon, lat + dlat, p)
-            o_dn, s_dn = model.directions(lon - dlon, lat - dlat, p)
-            columns.append((f * (np.einsum("ij,ij->i", grad_o, o_up - o_dn)
-                                 + np.einsum("ij,ij->i", grad_s, s_up - s_dn))
-                            / (2.0 * h))[:, None])
-        if free_period:
-            # d(R_z(-phi) w)/dphi = (y, -x, 0) of the body-frame vector; dphi/dP
-            dphi = -2.0 * np.pi * model.time / (p * p)
-            rate = (grad_o[:, 0] * o[:, 1] - grad_o[:, 1] * o[:, 0]
-                    + grad_s[:, 0] * s[:, 1] - grad_s[:, 1] * s[:, 0])
-            columns.append((f * rate * dphi)[:, None])
-        if free_phase:
-            a, d, _k = ph
-            e = np.exp(-model.alpha / d)
-            base = law @ areas
-            columns.append(np.stack([e * base, a * e * model.alpha / d**2 * base,
-                                     model.alpha * base], axis=1))
-        d_raw = np.concatenate(columns, axis=1)
-        # relative: d(L / <L>) = (dL - (L / <L>) d<L>) / <L>
-        mean = _block_means(raw, model.block, n_blocks)
-        d_mean = _block_means(d_raw, model.block, n_blocks)
-        d_cmp = np.where(relative[:, None], (d_raw - (raw / mean)[:, None] * d_mean)
-                         / mean[:, None], d_raw)
-        jac = -d_cmp * weight[:, None]
-        # convexity: d(sum A n / sum A)/da_k
-        total = areas.sum()
-        d_close = np.zeros((3, x.size))
-        d_close[:, :n_shape] = ((areas[:, None] * basis).T @ image.normals).T / total \
-            - np.outer(closing, areas @ basis) / total
-        return np.concatenate([jac, reg * d_close], axis=0)
-
-    result = least_squares(residuals, x0, jac=jacobian, method="lm", x_scale="jac",
-                           ftol=tolerance, xtol=1e-12, gtol=1e-12,
-                           max_nfev=max_iterations)
-    c, lon, lat, p, ph = unpack(result.x)
-    raw, _, areas, _, closing = evaluate(result.x)[:5]
-    resid = (data_rel - compared(raw)) * weight
-    chi2 = float(resid @ resid)
-    return ConvexFit(coefficients=c, areas=areas, longitude=float(lon), latitude=float(lat),
-                     period=float(p),
-                     phase=tuple(float(v) for v in ph), lambert=float(lambert), chi2=chi2,
-                     rms=float(np.sqrt(chi2 / model.n_points)),
-                     dark_facet=float(np.linalg.norm(closing)), model=compared(raw),
-                     n_evaluations=int(result.nfev), status=str(result.message))
+    start = [longitude, latitude] + ([period] if free_period else [])
+    fit = fit_shape_rotation(model, directions, start, columns=columns,
+                             coefficients=coefficients, phase=phase, free_phase=free_phase,
+                             lambert=lambert, convexity=convexity,
+                             max_iterations=max_iterations, tolerance=tolerance)
+    lon, lat = fit.rotation[:2]
+    p = fit.rotation[2] if free_period else period
+    return ConvexFit(coefficients=fit.coefficients, areas=fit.areas, longitude=float(lon),
+                     latitude=float(lat), period=float(p), phase=fit.phase,
+                     lambert=fit.lambert, chi2=fit.chi2, rms=fit.rms,
+                     dark_facet=fit.dark_facet, model=fit.model,
+                     n_evaluations=fit.n_evaluations, status=fit.status)
 
 
 def _canonical_pole(longitude, latitude):
@@ -460,3 +628,4 @@ def _canonical_pole(longitude, latitude):
                   np.sin(latitude)])
     return float(np.arctan2(v[1], v[0]) % (2.0 * np.pi)), float(np.arcsin(np.clip(v[2], -1,
                                                                                      1)))
+

@@ -28,7 +28,20 @@ from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex
 from attitude.inversion.gaussian_image import GaussianImage
 from attitude.inversion.minkowski import polyhedron_from_areas
 from attitude.inversion.observations import ObservedLightcurve
+from attitude.inversion.tumbler import (
+    EXAMPLE_SHAPE,
+    EXAMPLE_STATE,
+    PARAMETERS,
+    TumblerFit,
+    energy_for_period_ratio,
+    example_model,
+    fit_tumbler,
+    search_tumbler,
+    tumbler_directions,
+)
 from attitude.model.body import RigidBody
+from attitude.model.freebody import diagnose_many
+from attitude.model.sampling import tumbling_state
 from attitude.model.shape import Polyhedron
 from attitude.model.state import AttitudeState
 from attitude.photometry.geometry import Geometry
@@ -149,26 +162,33 @@ class InversionResult:
     body : RigidBody
         The shape at uniform unit density (its moment ratios are what count).
     state : AttitudeState
-        The rotation at the first epoch, ``ECLIPJ2000``: about the model's ``z`` axis.
+        The rotation at the first epoch, ``ECLIPJ2000``: about the model's ``z`` axis
+        (a tumbler: the fitted non-principal-axis state, the model's axes its principal
+        axes).
     period : float
-        Sidereal period, s.
+        Sidereal period, s (a tumbler: the precession period ``P_phi``).
     pole : tuple
-        ``(longitude, latitude)`` of the spin axis, deg, ecliptic J2000.
+        ``(longitude, latitude)`` of the spin axis (a tumbler: of L), deg, ecliptic
+        J2000.
     chi2 : float
         Sum of the squared residuals of the data (without the convexity term).
     rms : float
         ``sqrt(chi2 / n)``: relative flux for relative lightcurves.
     regime : str
-        ``"PA-short"`` (a principal-axis rotator is what was fitted).
+        ``"PA-short"`` (a principal-axis rotator is what was fitted), or the tumbler's
+        mode, ``"SAM"`` or ``"LAM"``.
     alternatives : list of (chi2, description)
-        The other solutions: the mirror pole, the next best pole.
+        The other solutions: the mirror pole, the next best pole; for a tumbler the
+        other mode and the mirror L.
     dark_facet : float
         Relative area of the facet that closes the Gaussian image.
     spin_axis_tilt : float
         Angle (deg) between the spin axis and the shape's axis of largest inertia at
-        uniform density: near 0 for a body that could rotate so in equilibrium.
-    fit : ConvexFit
-        The underlying fit.
+        uniform density: near 0 for a body that could rotate so in equilibrium (for a
+        tumbler: between the model's axes and the shape's principal axes).
+    fit : ConvexFit or TumblerFit
+        The underlying fit (a tumbler's carries the eight parameters, their errors and
+        the moment ratios of the shape: :class:`~attitude.inversion.tumbler.TumblerFit`).
 
     Examples
     --------
@@ -188,23 +208,35 @@ class InversionResult:
     alternatives: list
     dark_facet: float
     spin_axis_tilt: float
-    fit: ConvexFit = field(repr=False)
+    fit: ConvexFit | TumblerFit = field(repr=False)
 
 
 def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10,
            rows: int = 8, degree: int = 6, convexity: float = 0.1,
-           max_iterations: int = 100) -> InversionResult:
+           max_iterations: int = 100, start=None,
+           alternatives: bool = True) -> InversionResult:
     """Shape, pole and rotation state from lightcurves alone.
 
     Parameters
     ----------
     observations : list of ObservedLightcurve
         Lightcurves with their geometry (:func:`read_damit_lightcurves`).
-    rotation : {"auto", "principal"}
-        The rotation fitted; ``"auto"`` is the principal-axis model (the tumbling
-        inversion is not built yet).
+    rotation : {"auto", "principal", "tumbling"}
+        The rotation fitted; ``"auto"`` is the principal-axis model; ``"tumbling"`` the
+        non-principal-axis model of :mod:`attitude.inversion.tumbler`.
     period : float, Quantity or (min, max)
-        Sidereal period (s), or a range to scan (:func:`period_scan`).  Required.
+        Sidereal period (s), or a range to scan (:func:`period_scan`).  Required for a
+        principal-axis rotator.
+        Tumbling: optional, the two fundamental periods of the lightcurve (s; default
+        from :func:`~attitude.photometry.fit_periods`) when there is no ``start``.
+    start : dict, TumblerFit or InversionResult, optional
+        Tumbling only: the starting state, the eight parameters of
+        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s) or an earlier fit;
+        without it the state is searched from the data alone
+        (:func:`~attitude.inversion.tumbler.search_tumbler`, a minute or more).
+    alternatives : bool
+        Tumbling only: also fit the other mode (SAM/LAM, at the same period ratio) and the
+        mirror L, and report their chi2.
     poles : int
         Pole starts.
     rows, degree : int
@@ -231,12 +263,23 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     (True, 7200.0, [28.64789, 57.29578])
     >>> res.shape.volume                        # relative data: unit volume
     1.0...
+
+    A tumbler from a start near its state (:mod:`attitude.inversion.tumbler`):
+
+    >>> obs, truth = _example_tumbler()
+    >>> res = invert(obs, rotation="tumbling", start=truth, rows=4, degree=2,
+    ...              alternatives=False)
+    >>> res.regime, round(res.period, 3), bool(res.rms < 1e-6)
+    ('SAM', 7200.0, True)
     """
-    if rotation not in ("auto", "principal"):
-        raise PhotometryError(f"rotation {rotation!r} is not available: the tumbling "
-                              "inversion is not built yet; use 'principal' or 'auto'",
-                              key="rotation")
+    if rotation not in ("auto", "principal", "tumbling"):
+        raise PhotometryError(f"rotation {rotation!r} is unknown; use 'auto', 'principal' "
+                              "or 'tumbling'", key="rotation")
     observations = list(observations)
+    if rotation == "tumbling":
+        return _invert_tumbling(observations, start, period, rows=rows, degree=degree,
+                                convexity=convexity, max_iterations=max_iterations,
+                                alternatives=alternatives)
     if period is None:
         raise PhotometryError("give the period (s) or a range (min, max) to scan",
                               key="period")
@@ -315,3 +358,102 @@ def _example_observations():
     y = model.brightness(truth, 0.5, 1.0, 7200.0)
     return [ObservedLightcurve(o.epoch, o.time, y[model.block == k], o.geometry)
             for k, o in enumerate(obs)]
+
+
+def _start_parameters(start) -> np.ndarray:
+    """The eight parameters of a start: a dict, an array, a TumblerFit or a tumbling
+    InversionResult."""
+    if isinstance(start, InversionResult):
+        start = start.fit
+    if isinstance(start, TumblerFit):
+        start = start.parameters
+    if isinstance(start, dict):
+        missing = [k for k in PARAMETERS if k not in start]
+        if missing:
+            raise PhotometryError(f"start: missing {', '.join(missing)}", key="start")
+        start = [to_si(start[k], "s" if k == "precession_period" else
+                       ("" if k in ("energy_ratio", "ratio_a", "ratio_b") else "rad"),
+                       name=f"start.{k}", error=PhotometryError) for k in PARAMETERS]
+    p = np.asarray(start, dtype=float)
+    if p.shape != (8,):
+        raise PhotometryError(f"start: expected the 8 parameters {PARAMETERS}, got shape "
+                              f"{p.shape}", key="start")
+    return p
+
+
+def _other_mode(p: np.ndarray, regime: str):
+    """The start in the other mode at the same ``P_psi / P_phi`` (None if out of reach)."""
+    moments, _, w, _ = tumbling_state(*p)
+    d = diagnose_many(moments, w)
+    other = "LAM" if regime == "SAM" else "SAM"
+    er = energy_for_period_ratio(p[3], p[4], d["rotation"][0] / d["precession"][0], other)
+    if not np.isfinite(er[0]):
+        return None, other
+    q = p.copy()
+    q[2] = er[0]
+    return q, other
+
+
+def _invert_tumbling(observations, start, periods, *, rows, degree, convexity,
+                     max_iterations, alternatives) -> InversionResult:
+    """:func:`invert` for ``rotation="tumbling"``."""
+    model = ConvexModel(observations, GaussianImage(rows, degree))
+    n_parameters = model.image.n_coefficients + 8
+    if model.n_points <= n_parameters:
+        raise PhotometryError(f"{model.n_points} points for {n_parameters} parameters: "
+                              "more data, or a lower degree", key="observations")
+    others = []
+    if start is None:
+        if periods is not None:
+            periods = np.atleast_1d(to_si(periods, "s", name="period", error=PhotometryError))
+        fits = search_tumbler(model, periods, max_iterations=max_iterations)
+        best = fits[0]
+        others = [(f, "{} P_phi {:.6g} h, P_psi {:.6g} h, L ({:.1f}, {:.1f}) deg".format(
+            f.regime, f.periods["precession"] / 3600, f.periods["rotation"] / 3600,
+            *f.pole)) for f in fits[1:]]
+    else:
+        best = fit_tumbler(model, _start_parameters(start), convexity=convexity,
+                           max_iterations=max_iterations)
+    if alternatives and start is not None:
+        p0 = _start_parameters(start)
+        other, mode = _other_mode(p0, best.regime)
+        if other is not None:
+            fit = fit_tumbler(model, other, regime=mode, convexity=convexity,
+                              max_iterations=max_iterations)
+            others.append((fit, f"{mode} (P_phi {fit.periods['precession'] / 3600:.4f} h)"))
+        mirror = np.array([best.parameters[k] for k in PARAMETERS])
+        mirror[0] += np.pi
+        fit = fit_tumbler(model, mirror, regime=best.regime, convexity=convexity,
+                          max_iterations=max_iterations)
+        others.append((fit, "mirror L ({:.1f}, {:.1f}) deg".format(*fit.pole)))
+        ranked = sorted([(best, "")] + others, key=lambda f: f[0].chi2)
+        if ranked[0][0] is not best:
+            winner = ranked[0][0]
+            others = [(best, f"{best.regime} L ({best.pole[0]:.1f}, {best.pole[1]:.1f}) deg")
+                      ] + [o for o in others if o[0] is not winner]
+            best = winner
+    shape, _ = polyhedron_from_areas(model.image.normals, best.shape.areas)
+    mass, com, inertia = shape.mass_properties(1.0)
+    c_moment = float(np.max(np.diag(inertia)))
+    p = np.array([best.parameters[k] for k in PARAMETERS])
+    moments, q, w, _ = tumbling_state(*p, moment_c=c_moment)
+    body = RigidBody(np.diag(moments[0]), mass=mass, center_of_mass=com,
+                     name="inverted convex tumbler (fitted moment ratios)")
+    epoch = observations[0].epoch + TimeDelta(model.t0, format="sec")
+    state = AttitudeState(epoch, Rotation.from_quat(q[0]), w[0], frame="ECLIPJ2000")
+    return InversionResult(shape=shape, body=body, state=state, period=float(p[5]),
+                           pole=best.pole,
+                           chi2=best.chi2, rms=best.rms, regime=best.regime,
+                           alternatives=[(f.chi2, text) for f, text in others],
+                           dark_facet=best.shape.dark_facet,
+                           spin_axis_tilt=best.axis_misalignment, fit=best)
+
+
+def _example_tumbler():
+    """Relative lightcurves of a convex tumbler (the SAM of the tumbler module's
+    examples, P_phi 2 h) and its parameters."""
+    model = example_model()
+    truth = np.array(EXAMPLE_STATE)
+    y = model.brightness_of(EXAMPLE_SHAPE, *tumbler_directions(model, truth))
+    return [ObservedLightcurve(o.epoch, o.time, y[model.block == k], o.geometry)
+            for k, o in enumerate(model.observations)], truth

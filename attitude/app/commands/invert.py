@@ -29,11 +29,21 @@ def command(args) -> int:
         write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(text + "\n"))
     if not args.quiet:
         lon, lat = res.pole
-        print(f"{run.name}: pole ({lon:.2f}, {lat:.2f}) deg (ecliptic J2000), sidereal period "
-              f"{res.period / 3600:.9g} h, rms {res.rms:.4g}, dark facet "
-              f"{100 * res.dark_facet:.2f} %")
-        print(f"  spin axis {res.spin_axis_tilt:.2f} deg from the shape's axis of largest "
-              "inertia (uniform density)")
+        tumbler = getattr(res.fit, "periods", None) is not None
+        if tumbler:                        # a non-principal-axis state: L, P_phi, P_psi
+            fit, p = res.fit, res.fit.parameters
+            print(f"{run.name}: {res.regime} tumbler, L toward ({lon:.2f}, {lat:.2f}) deg "
+                  f"(ecliptic J2000), P_phi {fit.periods['precession'] / 3600:.7g} h, "
+                  f"P_psi {fit.periods['rotation'] / 3600:.7g} h, rms {res.rms:.4g}")
+            print(f"  E/E0 {p['energy_ratio']:.5f}, A/C {p['ratio_a']:.4f}, B/C "
+                  f"{p['ratio_b']:.4f}; the shape at uniform density: A/C "
+                  f"{fit.shape_ratios[0]:.4f}, B/C {fit.shape_ratios[1]:.4f}")
+        else:
+            print(f"{run.name}: pole ({lon:.2f}, {lat:.2f}) deg (ecliptic J2000), sidereal "
+                  f"period {res.period / 3600:.9g} h, rms {res.rms:.4g}, dark facet "
+                  f"{100 * res.dark_facet:.2f} %")
+            print(f"  spin axis {res.spin_axis_tilt:.2f} deg from the shape's axis of "
+                  "largest inertia (uniform density)")
         for chi2, text in res.alternatives:
             print(f"  alternative: {text}, chi2 {chi2:.6g} (best {res.chi2:.6g})")
         for e in run.expect:
