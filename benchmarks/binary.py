@@ -163,6 +163,129 @@ def gubas_comparison(folder: Path) -> dict:
             "gubas": gubas}
 
 
+def kepler_run(orbits: int = 100, rtol: float = 2.5e-14) -> dict:
+    """Two spheres on an eccentric orbit (e = 0.3), DOP853 at rtol 2.5e-14 (near the
+    smallest scipy takes, 2.2e-14) against the
+    Kepler solution (KeplerOrbit with mu = G (m1 + m2)): the largest position error over
+    ``orbits`` orbits, relative to the semi-major axis."""
+    ball = lambda m, r: att.RigidBody.from_mass_properties(  # noqa: E731
+        att.MassProperties.solid_sphere(m, r))
+    system = att.BinarySystem(ball(5.2e11, 400.0), ball(4.3e9, 90.0))
+    orbit = att.KeplerOrbit(system.mu, 1190.0, 0.3)
+    R0, V0 = orbit.state(0.0)
+    state = att.BinaryState("2026-12-01", R0, V0, Rotation.identity(), [0, 0, 0],
+                            Rotation.identity(), [0, 0, 0])
+    times = np.linspace(0.0, orbits * orbit.period, 20 * orbits + 1)
+    t0 = time.process_time()
+    eph = att.propagate(system, state, times, method="integrator", rtol=rtol)
+    cpu = time.process_time() - t0
+    error = np.linalg.norm(eph.dataset.relative_position.values - orbit.position(times),
+                           axis=-1) / orbit.a
+    return {"orbits": orbits, "e": 0.3, "rtol": rtol, "cpu_s": cpu,
+            "max_position_error_over_a": float(error.max()),
+            "position_error_over_a_at_end": float(error[-1])}
+
+
+def long_lgvi_run(orbits: int = 10_000, steps_per_orbit: int = 40) -> dict:
+    """The LGVI over ``orbits`` orbits of an ellipsoidal secondary (librating) about a
+    spherical primary, order 2, ``steps_per_orbit`` steps per orbit, sampled once per
+    orbit: the total angular momentum's largest relative change, and the energy's linear
+    trend over the run against its scatter (a drift shows as a trend far above the
+    scatter; a bounded error as a trend far below it)."""
+    system = att.BinarySystem(
+        att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(5.2e11, 400.0)),
+        att.RigidBody.from_mass_properties(ELLIPSOID(4.3e9, [103.16, 79.35, 66.13])))
+    n = np.sqrt(system.mu / 1190.0**3)
+    period = 2 * np.pi / n
+    state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+                            Rotation.identity(), [0, 0, 0],
+                            Rotation.from_euler("z", 10.0, degrees=True), [0, 0, n])
+    times = np.arange(orbits + 1) * period
+    t0 = time.process_time()
+    eph = att.propagate(system, state, times, method="lgvi", step=period / steps_per_orbit)
+    cpu = time.process_time() - t0
+    ds = eph.dataset
+    E, L = ds.total_energy.values, ds.total_angular_momentum.values
+    dL = np.linalg.norm(L - L[0], axis=-1).max() / np.linalg.norm(L[0])
+    x = times / times[-1]
+    slope, intercept = np.polyfit(x, E / E[0] - 1.0, 1)
+    scatter = float(np.std(E / E[0] - 1.0 - (slope * x + intercept)))
+    return {"orbits": orbits, "steps_per_orbit": steps_per_orbit, "cpu_s": cpu,
+            "max_abs_dH_over_H": float(dL),
+            "max_abs_dE_over_E": float(np.abs(E / E[0] - 1.0).max()),
+            "energy_trend_over_the_run": float(slope), "energy_scatter": scatter}
+
+
+def _variants(count: int, seed: int = 1):
+    """``count`` post-impact Dimorphos variants about a spherical-ish Didymos: the
+    secondary's axes (a/b from 1.0 to 1.6, b/c 1.2-1.6, the volume kept), the impact's
+    along-track dv (-2.70 +- 0.10 mm/s) applied at t = 0 to a synchronous start."""
+    rng = np.random.default_rng(seed)
+    primary = att.RigidBody.from_mass_properties(ELLIPSOID(5.282e11, [394.0, 394.0, 290.0]))
+    volume = 89.5 * 84.5 * 57.5
+    systems, states = [], []
+    for _ in range(count):
+        ab, bc = rng.uniform(1.0, 1.6), rng.uniform(1.2, 1.6)
+        c = (volume / (ab * bc * bc)) ** (1 / 3)
+        b, a = bc * c, ab * bc * c
+        system = att.BinarySystem(primary, att.RigidBody.from_mass_properties(
+            ELLIPSOID(4.3e9, [a, b, c])))
+        n = np.sqrt(system.mu / 1190.0**3)
+        dv = rng.normal(-2.70e-3, 0.10e-3)
+        states.append(att.BinaryState(
+            "2022-09-26T23:15:09.184", [1190.0, 0, 0], [0, n * 1190.0 + dv, 0],
+            Rotation.identity(), [0, 0, 2 * np.pi / (2.26 * 3600.0)],
+            Rotation.identity(), [0, 0, n]))
+        systems.append(system)
+    return systems, states
+
+
+def _run_variants(systems, states, times, step):
+    from attitude.binary.lgvi import integrate_lgvi_batch
+    from attitude.binary.propagate import initial_vector
+
+    y0 = np.array([initial_vector(s) for s in states])
+    return integrate_lgvi_batch(systems, y0, times, step)
+
+
+def variants_run(count: int = 1000, days: float = 30.0, step: float = 60.0,
+                 workers: int = 0) -> dict:
+    """``count`` post-impact variants over ``days`` with the LGVI over all of them at once
+    (integrate_lgvi_batch), sampled every hour, each member's regime by
+    att.binary.diagnose; with ``workers``, the same members split over a dask
+    LocalCluster of that many single-threaded workers, and the scaling."""
+    from attitude.binary.diagnostics import diagnose
+    from attitude.binary.propagate import binary_ephemeris
+
+    systems, states = _variants(count)
+    times = np.arange(0.0, days * DAY + 1.0, 3600.0)
+    t0 = time.perf_counter()
+    y = _run_variants(systems, states, times, step)
+    serial = time.perf_counter() - t0
+    regimes = {}
+    for s, st, yy in zip(systems, states, y):
+        r = diagnose(binary_ephemeris(s, st, times, yy, method="lgvi")).secondary_regime
+        regimes[r] = regimes.get(r, 0) + 1
+    out = {"members": count, "days": days, "step_s": step, "wall_s": serial,
+           "regime_fractions": {k: v / count for k, v in sorted(regimes.items())}}
+    if workers:
+        from dask.distributed import Client, LocalCluster
+
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True) as c, \
+                Client(c) as client:
+            client.submit(_run_variants, systems[:2], states[:2], times[:2], step).result()
+            chunks = np.array_split(np.arange(count), workers)
+            t0 = time.perf_counter()
+            futures = [client.submit(_run_variants, [systems[i] for i in ix],
+                                     [states[i] for i in ix], times, step) for ix in chunks]
+            parts = client.gather(futures)
+            parallel = time.perf_counter() - t0
+        same = bool(np.array_equal(np.concatenate(parts), y))
+        out.update(workers=workers, parallel_wall_s=parallel,
+                   scaling=serial / (workers * parallel), same_as_serial=same)
+    return out
+
+
 def report(name: str, run: dict) -> None:
     setting = f"step {run['step']:g} s" if "step" in run else f"rtol {run['rtol']:g}"
     print(f"  {name:8s} {setting:14s} CPU {run['cpu_s']:6.2f} s   max |dE/E| "
@@ -182,7 +305,41 @@ def main(argv=None) -> None:
     ap.add_argument("--gubas", type=Path, default=None, metavar="DIR",
                     help="compare with a GUBAS run of its Didymos example in DIR")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "binary.json")
+    ap.add_argument("--kepler", action="store_true",
+                    help="two spheres, 100 orbits of DOP853 (rtol 2.5e-14) against Kepler")
+    ap.add_argument("--long", type=int, default=0, metavar="ORBITS",
+                    help="the LGVI over ORBITS orbits (the issue's 10000)")
+    ap.add_argument("--variants", type=int, default=0, metavar="N",
+                    help="N post-impact Dimorphos variants over a month, all at once")
+    ap.add_argument("--workers", type=int, default=0, metavar="W",
+                    help="with --variants: also on a dask LocalCluster of W workers")
+    ap.add_argument("--only", action="store_true",
+                    help="run only the parts asked (--kepler, --long, --variants), not "
+                         "the Didymos-like day; keep the other results in the file")
     args = ap.parse_args(argv)
+    if args.only:
+        result = json.loads(args.out.read_text()) if args.out.is_file() else {}
+        if args.kepler:
+            k = result["kepler_100_orbits"] = kepler_run()
+            print(f"two spheres, {k['orbits']} orbits (e 0.3), DOP853 {k['rtol']:g}: largest "
+                  f"position error {k['max_position_error_over_a']:.2e} of a, CPU "
+                  f"{k['cpu_s']:.1f} s")
+        if args.long:
+            g = result["lgvi_long"] = long_lgvi_run(args.long)
+            print(f"LGVI over {g['orbits']} orbits ({g['steps_per_orbit']} steps each): "
+                  f"max |dH/H| {g['max_abs_dH_over_H']:.2e}, energy trend "
+                  f"{g['energy_trend_over_the_run']:.2e} against scatter "
+                  f"{g['energy_scatter']:.2e}, CPU {g['cpu_s']:.0f} s")
+        if args.variants:
+            v = result["variants"] = variants_run(args.variants, workers=args.workers)
+            print(f"{v['members']} post-impact variants over {v['days']:g} days: "
+                  f"{v['wall_s']:.0f} s; regimes {v['regime_fractions']}"
+                  + (f"; {v['workers']} dask workers {v['parallel_wall_s']:.0f} s, scaling "
+                     f"{100 * v['scaling']:.0f} %" if "scaling" in v else ""))
+        text = json.dumps(result, indent=1)
+        path = write_atomically(args.out, lambda tmp: tmp.write_text(text))
+        print(f"results: {path}")
+        return
 
     print(f"{cpu_name()}: one Didymos-like day, order 4, outputs every 30 s")
     result = {"benchmark": "binary", "cpu": cpu_name(), "cores": os.cpu_count(),

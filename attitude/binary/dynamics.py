@@ -164,11 +164,12 @@ def _tolerance_scale(system: BinarySystem, y0: np.ndarray) -> np.ndarray:
 
 
 def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
-                     rtol: float = 1e-12, atol_scale: float = 1e-12) -> np.ndarray:
+                     rtol: float = 1e-12, atol_scale: float | None = None) -> np.ndarray:
     """Integrate one system from ``y0`` (at time 0) to the sorted times ``t >= 0`` with
     scipy's DOP853; returns ``(len(t), 20)`` with unit quaternions.
 
-    ``atol`` per component: ``atol_scale`` times the component's scale (the separation
+    ``atol`` per component: ``atol_scale`` (default ``rtol``: one tolerance, relative to
+    the system's scales) times the component's scale (the separation
     for R, the orbital speed for V, 1 for q, each body's fastest rate for its w), the
     speed and rate never below the system's own, ``sqrt(mu / R)`` and ``sqrt(mu / R^3)``
     (a body that does not spin at first would otherwise get no absolute tolerance at
@@ -195,7 +196,8 @@ def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
     if t[-1] == 0.0:
         return np.repeat(y0[None], t.size, axis=0)
     sol = solve_ivp(lambda _, y: derivatives(system, y), (0.0, float(t[-1])), y0,
-                    method="DOP853", t_eval=t, rtol=rtol, atol=atol_scale * scale)
+                    method="DOP853", t_eval=t, rtol=rtol,
+                    atol=(rtol if atol_scale is None else atol_scale) * scale)
     if not sol.success:
         raise PropagationError(f"binary DOP853: {sol.message}")
     y = sol.y.T.copy()
