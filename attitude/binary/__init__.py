@@ -4,11 +4,12 @@ Modules: ``integrals`` (each body's inertia integrals to order N), ``mutual`` (t
 mutual potential, force and torques), ``system`` (:class:`BinarySystem`,
 :class:`BinaryState`, :class:`Impulse`), ``dynamics`` (equations of motion, DOP853),
 ``propagate`` (the ephemeris of a binary), ``diagnostics`` (periods, libration, regime:
-:func:`diagnose`).
+:func:`diagnose`), ``chaos`` (the finite-time Lyapunov exponent).
 """
 
 from __future__ import annotations
 
+from attitude.binary.chaos import BinaryLyapunov, lyapunov_exponent
 from attitude.binary.diagnostics import (
     BinaryDiagnosis,
     PeriodChange,
@@ -25,4 +26,4 @@ from attitude.foundations.constants import G
 __all__ = ["InertiaIntegrals", "inertia_integrals", "multi_indices", "rotated", "MutualForces",
            "MutualGravity", "BinarySystem", "BinaryState", "Impulse", "BODIES",
            "propagate_binary", "G", "BinaryDiagnosis", "PeriodChange", "diagnose",
-           "libration_angle", "period_change"]
+           "libration_angle", "period_change", "BinaryLyapunov", "lyapunov_exponent"]

@@ -230,6 +230,10 @@ EXPECT = Table("expect", (
         "libration_amplitude", unit="rad", default_unit="rad")),
     Key("apsidal_rate", "table", table=Expectation.table(
         "apsidal_rate", unit="rad/s", default_unit="rad/s")),
+    Key("lyapunov_exponent", "table", table=Expectation.table(
+        "lyapunov_exponent", unit="1/s", default_unit="1/s"),
+        doc="finite-time, of the whole run (it and secondary_regime = 'chaotic' make the "
+            "run measure it: attitude.binary.chaos)"),
     Key("secondary_regime", "string", choices=REGIMES),
     *(Key(k, "table", table=_BOUND, doc="largest relative change between impulses")
       for k in ("energy_rel_drift", "angular_momentum_rel_drift")),
@@ -590,8 +594,8 @@ def _expectations(expect: dict) -> tuple:
         elif key in ("energy_rel_drift", "angular_momentum_rel_drift"):
             out.append(Expectation.at_most(key, spec["max"]))
         else:
-            default = "s" if key in _TIME_KEYS else ("rad" if key == "libration_amplitude"
-                                                     else "rad/s")
+            default = "s" if key in _TIME_KEYS else {
+                "libration_amplitude": "rad", "lyapunov_exponent": "1/s"}.get(key, "rad/s")
             out.append(Expectation.from_table(key, spec, default_unit=default))
     return tuple(out)
 
@@ -635,6 +639,8 @@ class BinaryRun:
                "apsidal_rate": d.apsidal_rate, "eccentricity": d.eccentricity,
                "conservation": d.conservation, "method": self.method,
                "expect": self.expect, "outputs": [str(p) for p in self.outputs]}
+        if d.lyapunov is not None:
+            doc["lyapunov_exponent"] = d.lyapunov_exponent
         if self.change is not None:
             c = self.change
             doc["period_change"] = {"time": c.time, "before": c.before, "after": c.after,
@@ -707,7 +713,10 @@ def run_binary(scenario: BinaryScenario, *, output=None, write_outputs: bool = T
                            events=list(scenario.impulses))
     eph.dataset.attrs["title"] = f"attitude ephemeris: binary system, {scenario.name}"
     times = [imp.seconds_after(scenario.state.epoch) for imp in scenario.impulses]
-    d = diagnose(eph, impulses=times)
+    chaos = any(e.key == "lyapunov_exponent" or (e.key == "secondary_regime"
+                                                 and e.value == "chaotic")
+                for e in scenario.expect)
+    d = diagnose(eph, impulses=times, chaos=chaos, system=scenario.system)
     change = None
     if times and scenario.times[0] < min(times) <= scenario.times[-1]:
         change = period_change(eph, min(times))
@@ -732,5 +741,6 @@ def _check(e: Expectation, d, change) -> dict:
         got = getattr(d, key)
     if got is None or not math.isfinite(got):
         return e.check(None)
-    si = {"libration_amplitude": u.rad, "apsidal_rate": u.rad / u.s}.get(key, u.s)
+    si = {"libration_amplitude": u.rad, "apsidal_rate": u.rad / u.s,
+          "lyapunov_exponent": 1 / u.s}.get(key, u.s)
     return e.check(float((got * si).to_value(e.unit)))
