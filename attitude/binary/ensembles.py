@@ -26,11 +26,10 @@ import numpy as np
 import xarray as xr
 from scipy.spatial.transform import Rotation
 
-from attitude.binary.config import impact_delta_v
 from attitude.binary.diagnostics import REGIMES, diagnose, period_change
 from attitude.binary.dynamics import mutual_forces
 from attitude.binary.propagate import propagate_binary
-from attitude.binary.system import BinaryState, BinarySystem, Impulse
+from attitude.binary.system import BinaryState, BinarySystem, Impulse, impact_delta_v
 from attitude.foundations.errors import AttitudeError, BinarySystemError
 from attitude.model.body import MassProperties, RigidBody
 from attitude.propagation.cluster import client_for, shared_local_client

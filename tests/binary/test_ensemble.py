@@ -91,3 +91,86 @@ def test_on_a_dask_local_cluster():
     for key in ("orbit_period", "period_change", "libration_amplitude"):
         np.testing.assert_array_equal(there[key].values, here[key].values)
     assert there.attrs["regime_fractions"] == here.attrs["regime_fractions"]
+
+
+SCENARIO = f'''
+[scenario]
+name = "DART family"
+
+[binary]
+epoch = "2022-09-26T00:00:00"
+duration = "{2.8 * PERIOD} s"
+output_step = "10 min"
+step = "{STEP} s"
+synchronous = true
+
+[binary.primary]
+primitive = "ellipsoid"
+mass = "5.282e11 kg"
+semi_axes = [394.0, 394.0, 290.0]
+spin_period = "2.26 h"
+
+[binary.secondary]
+primitive = "ellipsoid"
+mass = "4.3e9 kg"
+semi_axes = [89.5, 84.5, 57.5]
+
+[binary.orbit]
+semi_major_axis = "1.19 km"
+circular = true
+
+[[binary.impulse]]
+time = "{1.5 * PERIOD} s"           # Dimorphos near -x, moving -y: a head-on hit
+beta = 3.61
+impactor_mass = "580 kg"
+impactor_velocity = [0.0, 5546.3, -2645.5]
+
+[binary.ensemble]
+n = 4
+seed = 3
+sigma = {{ "impulse.beta" = 0.2, "primary.mass" = "1e10 kg", "secondary.semi_axes" = 1.5 }}
+
+[expect.regime_fractions]
+librating = {{ value = 1.0, abs_tol = 1e-12 }}
+'''
+
+
+def test_scenario_ensemble_runs_with_attitude_run(tmp_path, capsys):
+    import json
+
+    from attitude.app.cli import main
+    from attitude.binary.config import load_binary, run_binary
+
+    path = tmp_path / "family.toml"
+    path.write_text(SCENARIO)
+    run = run_binary(load_binary(path), write_outputs=False)
+    ds = run.ensemble
+    assert ds.status.values.tolist() == [0] * 4 and run.ok
+    assert sorted(ds.attrs["inputs"]) == ["impulse_beta", "primary_mass",
+                                          "secondary_semi_axes_0", "secondary_semi_axes_1",
+                                          "secondary_semi_axes_2"]
+    assert np.all((ds.period_change.values / 60 > -45) & (ds.period_change.values / 60 < -25))
+    # the CLI: summary, report, netCDF; exit 0 (expectations met)
+    code = main(["run", str(path), "-o", str(tmp_path / "family.nc"),
+                 "--report", str(tmp_path / "r.json")])
+    assert code == 0, capsys.readouterr()
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["status"]["ok"] == 4 and report["regime_fractions"] == {"librating": 1.0}
+    import xarray as xr
+    with xr.open_dataset(tmp_path / "family.nc") as back:
+        np.testing.assert_array_equal(back.period_change.values, ds.period_change.values)
+
+
+@pytest.mark.parametrize("edit, key", [
+    ('sigma = { "impulse.beta" = 0.2', 'sigma = { "orbit.inclination" = 0.2'),
+    ("[expect.regime_fractions]", "[expect.orbit_period]\nvalue = 1.0\nabs_tol = 1.0\n"
+                                  "[expect.regime_fractions]"),
+])
+def test_scenario_ensemble_bad_input(tmp_path, edit, key):
+    from attitude.binary.config import load_binary
+    from attitude.foundations.errors import ScenarioError
+
+    path = tmp_path / "family.toml"
+    path.write_text(SCENARIO.replace(edit, key))
+    with pytest.raises(ScenarioError):
+        load_binary(path)
