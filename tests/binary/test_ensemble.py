@@ -174,3 +174,20 @@ def test_scenario_ensemble_bad_input(tmp_path, edit, key):
     path.write_text(SCENARIO.replace(edit, key))
     with pytest.raises(ScenarioError):
         load_binary(path)
+
+
+def test_an_impossible_draw_is_bad_input_and_chaos_adds_the_exponent():
+    members = sample_dart(2, rng=4, primary_mass=(-1.0, 0.0))      # no mass: bad input
+    assert isinstance(members[0][0], Exception)
+    ds = att.binary.ensemble(members, TIMES, step=STEP)
+    assert ds.status.values.tolist() == [STATUS_INVALID] * 2 and ds.attrs[
+        "regime_fractions"] == {}
+    assert "lyapunov_exponent" not in ds
+    one = sample_dart(1, rng=4)
+    short = TIMES[TIMES <= 2.0 * PERIOD]
+    ds = att.binary.ensemble(one, short, step=STEP, chaos=True)
+    system, state, impulses, _ = one[0]
+    eph = att.propagate(system, state, short, step=STEP, events=impulses)
+    d = att.binary.diagnose(eph, impulses=[impulses[0].seconds_after(state.epoch)],
+                            chaos=True, system=system)
+    assert ds.lyapunov_exponent.values[0] == d.lyapunov_exponent
