@@ -4,11 +4,13 @@ Modules: ``integrals`` (each body's inertia integrals to order N), ``mutual`` (t
 mutual potential, force and torques), ``system`` (:class:`BinarySystem`,
 :class:`BinaryState`, :class:`Impulse`), ``dynamics`` (equations of motion, DOP853),
 ``propagate`` (the ephemeris of a binary), ``diagnostics`` (periods, libration, regime:
-:func:`diagnose`).
+:func:`diagnose`), ``chaos`` (the finite-time Lyapunov exponent), ``ensembles`` (many
+systems in one call, in this process or on dask: :func:`ensemble`, :func:`sample_dart`).
 """
 
 from __future__ import annotations
 
+from attitude.binary.chaos import BinaryLyapunov, lyapunov_exponent
 from attitude.binary.diagnostics import (
     BinaryDiagnosis,
     PeriodChange,
@@ -16,6 +18,7 @@ from attitude.binary.diagnostics import (
     libration_angle,
     period_change,
 )
+from attitude.binary.ensembles import ensemble, sample_dart
 from attitude.binary.integrals import InertiaIntegrals, inertia_integrals, multi_indices, rotated
 from attitude.binary.mutual import MutualForces, MutualGravity
 from attitude.binary.propagate import propagate_binary
@@ -25,4 +28,5 @@ from attitude.foundations.constants import G
 __all__ = ["InertiaIntegrals", "inertia_integrals", "multi_indices", "rotated", "MutualForces",
            "MutualGravity", "BinarySystem", "BinaryState", "Impulse", "BODIES",
            "propagate_binary", "G", "BinaryDiagnosis", "PeriodChange", "diagnose",
-           "libration_angle", "period_change"]
+           "libration_angle", "period_change", "BinaryLyapunov", "lyapunov_exponent",
+           "ensemble", "sample_dart"]

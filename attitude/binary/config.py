@@ -64,6 +64,22 @@ orbit in the mutual force of the two bodies (not the point masses'), along the v
 direction: a Keplerian circular speed about an oblate primary starts a slightly eccentric
 orbit, and with it a forced libration.
 
+**Ensembles.**  ``[binary.ensemble]`` runs ``n`` variants of the system
+(:func:`attitude.binary.ensemble`): each is the file's values with the keys of ``sigma``
+(``"table.key"``: :data:`SAMPLED`) drawn from normals about them (``seed``; each
+semi-axis its own draw; ``impulse.*`` for every impulse in the DART form), a draw that
+makes no valid system counts as bad input (status 1).  ``[expect.regime_fractions]``
+(only with it, and the only expectation it takes) checks each regime's share::
+
+    [binary.ensemble]
+    n = 100
+    seed = 1
+    sigma = { "impulse.beta" = 0.2, "primary.mass" = "1e10 kg" }
+    client = "local"              # optional: a dask LocalCluster, or a scheduler address
+
+    [expect.regime_fractions]
+    librating = { value = 1.0, abs_tol = 0.05 }
+
 :func:`run_binary` propagates it (:func:`attitude.propagate`), diagnoses it
 (:func:`attitude.binary.diagnostics.diagnose`), checks ``[expect]`` and writes the netCDF
 ephemeris.
@@ -71,6 +87,9 @@ ephemeris.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -82,14 +101,16 @@ from scipy.spatial.transform import Rotation
 
 from attitude.binary.diagnostics import REGIMES, diagnose, period_change
 from attitude.binary.dynamics import mutual_forces
+from attitude.binary.ensembles import ensemble as run_ensemble
 from attitude.binary.propagate import METHODS as AVAILABLE_METHODS
 from attitude.binary.propagate import propagate_binary
-from attitude.binary.system import BinaryState, BinarySystem, Impulse
+from attitude.binary.system import BinaryState, BinarySystem, Impulse, impact_delta_v
 from attitude.foundations.errors import AttitudeError, ScenarioError
 from attitude.foundations.expectation import Expectation
 from attitude.foundations.quantities import TIME_SCALES
 from attitude.foundations.spec import Key, Table, markdown, validate
 from attitude.model.body import MassProperties, RigidBody
+from attitude.model.ephemeris import write_atomically
 from attitude.model.orbit import KeplerOrbit
 
 __all__ = ["BINARY", "EXPECT", "BinaryScenario", "BinaryRun", "is_binary", "load_binary",
@@ -186,6 +207,25 @@ IMPULSE = Table("impulse", (
            ("beta", ("impactor_velocity",)), ("ejecta_direction", ("impactor_velocity",))),
     doc="A sudden change: delta_v, or the DART form M dv = m U + m (beta - 1) (E.U) E.")
 
+#: The keys ``[binary.ensemble] sigma`` may draw (as ``"table.key"``) and their units.
+SAMPLED = {"primary.mass": "kg", "secondary.mass": "kg", "primary.semi_axes": "m",
+           "secondary.semi_axes": "m", "primary.spin_period": "s",
+           "orbit.semi_major_axis": "m", "orbit.eccentricity": "", "impulse.beta": "",
+           "impulse.impactor_mass": "kg"}
+ENSEMBLE = Table("ensemble", (
+    Key("n", "integer", required=True, bounds=(1, 1_000_000), doc="members"),
+    Key("seed", "integer", default=0, doc="of the normal draws"),
+    Key("chaos", "boolean", default=False, doc="each member's Lyapunov exponent"),
+    Key("chunk_size", "integer", bounds=(1, None), doc="members per dask task"),
+    Key("client", "string", doc='"local" or a dask scheduler address; default: in process'),
+    Key("sigma", "table", required=True, table=Table("sigma", tuple(
+        Key(k, "quantity", unit=u, nonnegative=True, shape=((), (3,)) if "axes" in k
+            else ()) for k, u in SAMPLED.items())),
+        doc='standard deviations of the drawn keys, e.g. { "impulse.beta" = 0.2 }; each '
+            "member is the file's values plus sigma times a normal draw (each semi-axis "
+            "its own)"),
+))
+
 BINARY = Table("binary", (
     Key("epoch", "time", required=True, doc="ISO 8601, in `time_scale`"),
     Key("time_scale", "string", choices=TIME_SCALES + tuple(s.upper() for s in TIME_SCALES),
@@ -209,6 +249,8 @@ BINARY = Table("binary", (
     Key("secondary", "table", table=_body_table("secondary"), required=True),
     Key("orbit", "table", table=ORBIT, required=True),
     Key("impulse", "tables", table=IMPULSE, doc="any number of [[binary.impulse]]"),
+    Key("ensemble", "table", table=ENSEMBLE,
+        doc="run n variants of the system, the keys of `sigma` drawn from normals"),
 ))
 
 SCENARIO = Table("scenario", (
@@ -231,7 +273,14 @@ EXPECT = Table("expect", (
         "libration_amplitude", unit="rad", default_unit="rad")),
     Key("apsidal_rate", "table", table=Expectation.table(
         "apsidal_rate", unit="rad/s", default_unit="rad/s")),
+    Key("lyapunov_exponent", "table", table=Expectation.table(
+        "lyapunov_exponent", unit="1/s", default_unit="1/s"),
+        doc="finite-time, of the whole run (it and secondary_regime = 'chaotic' make the "
+            "run measure it: attitude.binary.chaos)"),
     Key("secondary_regime", "string", choices=REGIMES),
+    Key("regime_fractions", "table", table=Table("regime_fractions", tuple(
+        Key(r, "table", table=Expectation.table(r, unit="", with_unit=False))
+        for r in REGIMES)), doc="[binary.ensemble]: each regime's share of the members"),
     *(Key(k, "table", table=_BOUND, doc="largest relative change between impulses")
       for k in ("energy_rel_drift", "angular_momentum_rel_drift")),
 ))
@@ -275,6 +324,7 @@ class BinaryScenario:
     expect: tuple
     output: Path | None
     note: str = ""
+    ensemble: dict | None = None
 
 
 def _fail(path, key, message) -> ScenarioError:
@@ -345,6 +395,24 @@ def load_binary(path) -> BinaryScenario:
         raise _fail(path, "expect", "must be a table")
     expect = validate(expect_doc, EXPECT, where="expect", path=str(path), error=ScenarioError)
 
+    ensemble = cfg.pop("ensemble", None)
+    if ensemble is not None:
+        ensemble = {"seed": 0, "chaos": False} | ensemble
+    if ensemble is not None and set(expect) - {"regime_fractions"}:
+        raise _fail(path, f"expect.{sorted(set(expect) - {'regime_fractions'})[0]}",
+                    "a [binary.ensemble] scenario expects only regime_fractions")
+    if ensemble is None and "regime_fractions" in expect:
+        raise _fail(path, "expect.regime_fractions", "needs a [binary.ensemble]")
+    scenario = _build(path, meta, cfg, expect)
+    if ensemble is not None:
+        _members(path, cfg, expect, ensemble, 1)          # each drawn key is in the file
+        scenario = dataclasses.replace(scenario, ensemble={**ensemble, "cfg": cfg,
+                                                            "expect": expect})
+    return scenario
+
+
+def _build(path: Path, meta: dict, cfg: dict, expect: dict) -> BinaryScenario:
+    """The scenario of a validated ``[binary]`` table (``cfg``, with defaults)."""
     primary = _body(path, cfg["primary"], "primary")
     secondary = _body(path, cfg["secondary"], "secondary")
     try:
@@ -563,36 +631,19 @@ def _impulse(path, item: dict, i: int, state: BinaryState, system: BinarySystem,
                    angular_impulse=item.get("angular_impulse", np.zeros(3)))
 
 
-def impact_delta_v(impactor_mass: float, impactor_velocity, beta: float, body_mass: float,
-                   ejecta_direction=None) -> np.ndarray:
-    """A kinetic impact's velocity change of the body, m/s (Cheng et al. 2023, eq. 1):
-    ``M dv = m U + m (beta - 1) (E . U) E``, with ``E`` the ejecta's direction (default:
-    the impactor's, so ``dv = beta m U / M``).
-
-    Examples
-    --------
-    >>> impact_delta_v(580.0, [0.0, -6145.0, 0.0], 3.61, 4.3e9).round(7).tolist()
-    [0.0, -0.0029923, 0.0]
-    """
-    U = np.asarray(impactor_velocity, dtype=float)
-    E = U if ejecta_direction is None else np.asarray(ejecta_direction, dtype=float)
-    norm = np.linalg.norm(E)
-    if not norm > 0:
-        return impactor_mass * U / body_mass
-    E = E / norm
-    return impactor_mass * (U + (beta - 1) * (E @ U) * E) / body_mass
-
-
 def _expectations(expect: dict) -> tuple:
     out = []
     for key, spec in expect.items():
         if key == "secondary_regime":
             out.append(Expectation.exact(key, spec))
+        elif key == "regime_fractions":
+            out += [Expectation.from_table(f"regime_fractions.{r}", v, default_unit="")
+                    for r, v in spec.items()]
         elif key in ("energy_rel_drift", "angular_momentum_rel_drift"):
             out.append(Expectation.at_most(key, spec["max"]))
         else:
-            default = "s" if key in _TIME_KEYS else ("rad" if key == "libration_amplitude"
-                                                     else "rad/s")
+            default = "s" if key in _TIME_KEYS else {
+                "libration_amplitude": "rad", "lyapunov_exponent": "1/s"}.get(key, "rad/s")
             out.append(Expectation.from_table(key, spec, default_unit=default))
     return tuple(out)
 
@@ -617,6 +668,7 @@ class BinaryRun:
     note: str = ""
     method: str = "integrator"
     extra: dict = field(default_factory=dict)
+    ensemble: object = None
 
     @property
     def ok(self) -> bool:
@@ -625,7 +677,10 @@ class BinaryRun:
 
     def report(self) -> dict:
         """The ``--report`` JSON document: scenario, regime (the secondary's), periods
-        (s), the period change, conservation, expect, outputs."""
+        (s), the period change, conservation, expect, outputs; for an ensemble: the
+        members' status counts, the regime fractions and the period changes' quantiles."""
+        if self.ensemble is not None:
+            return _ensemble_report(self)
         d = self.diagnosis
         doc = {"scenario": self.name, "regime": d.secondary_regime,
                "periods": {"orbit": d.orbit_period, "osculating": d.osculating_period,
@@ -636,6 +691,8 @@ class BinaryRun:
                "apsidal_rate": d.apsidal_rate, "eccentricity": d.eccentricity,
                "conservation": d.conservation, "method": self.method,
                "expect": self.expect, "outputs": [str(p) for p in self.outputs]}
+        if d.lyapunov is not None:
+            doc["lyapunov_exponent"] = d.lyapunov_exponent
         if self.change is not None:
             c = self.change
             doc["period_change"] = {"time": c.time, "before": c.before, "after": c.after,
@@ -656,6 +713,87 @@ def _finite(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def _draws(path, cfg: dict, sigma: dict, rng) -> tuple[dict, dict]:
+    """One member's ``[binary]`` table (a copy with the drawn keys) and its inputs."""
+    member = copy.deepcopy(cfg)
+    inputs = {}
+    for key, sig in sigma.items():
+        table, name = key.split(".")
+        where = f"binary.ensemble.sigma.{key}"
+        if table == "impulse":
+            items = [i for i in member.get("impulse", []) if "impactor_mass" in i]
+            if not items:
+                raise _fail(path, where, "no [[binary.impulse]] in the DART form "
+                                         "(impactor_mass) to draw it for")
+            value = float(items[0].get(name, 1.0) + sig * rng.normal())
+            for item in items:
+                item[name] = value
+        else:
+            holder = member[table]
+            if name not in holder and name != "eccentricity":
+                raise _fail(path, where, f"[binary.{table}] has no {name} to draw about")
+            base = np.asarray(holder.get(name, 0.0), dtype=float)
+            value = base + np.asarray(sig, dtype=float) * rng.normal(size=base.shape)
+            holder[name] = value if base.shape else float(value)
+        label = key.replace(".", "_")
+        if np.ndim(value):
+            inputs.update({f"{label}_{j}": float(v) for j, v in enumerate(value)})
+        else:
+            inputs[label] = float(value)
+    return member, inputs
+
+
+def _members(path, cfg: dict, expect: dict, spec: dict, n: int | None = None) -> list:
+    """The members of ``[binary.ensemble]``: ``(system, state, impulses, inputs)``, or
+    ``(error, None, [], inputs)`` for a draw that makes no valid system (status 1)."""
+    rng = np.random.default_rng(spec["seed"])
+    members = []
+    for _ in range(spec["n"] if n is None else n):
+        member, inputs = _draws(path, cfg, spec["sigma"], rng)
+        try:
+            built = _build(path, {}, member, expect)
+            members.append((built.system, built.state, list(built.impulses), inputs))
+        except (AttitudeError, ValueError) as err:
+            members.append((err, None, [], inputs))
+    return members
+
+
+def _run_ensemble(scenario: BinaryScenario, output, write_outputs: bool) -> BinaryRun:
+    spec = scenario.ensemble
+    members = _members(scenario.path, spec["cfg"], spec["expect"], spec)
+    ds = run_ensemble(members, scenario.times, method=scenario.method, rtol=scenario.rtol,
+                      step=scenario.step, chaos=spec["chaos"], client=spec.get("client"),
+                      chunk_size=spec.get("chunk_size"))
+    fractions = ds.attrs["regime_fractions"]
+    checks = [e.check(fractions.get(e.key.split(".", 1)[1], 0.0)) for e in scenario.expect]
+    outputs = []
+    target = Path(output) if output is not None else scenario.output
+    if write_outputs and target is not None:
+        out = ds.assign_attrs(regime_fractions=json.dumps(fractions))
+        for key in ("message", "secondary_regime"):
+            out[key] = out[key].astype(str)
+        outputs.append(write_atomically(target, lambda tmp: out.to_netcdf(
+            tmp, engine="netcdf4", format="NETCDF4")))
+    return BinaryRun(scenario.name, None, None, None, checks, outputs, scenario.note,
+                     scenario.method, ensemble=ds)
+
+
+def _ensemble_report(run: BinaryRun) -> dict:
+    ds = run.ensemble
+    status = ds["status"].values
+    change = ds["period_change"].values[status == 0]
+    change = change[np.isfinite(change)]
+    doc = {"scenario": run.name, "members": int(status.size),
+           "status": {"ok": int(np.sum(status == 0)), "invalid_input": int(np.sum(status == 1)),
+                      "failed": int(np.sum(status == 2))},
+           "regime_fractions": ds.attrs["regime_fractions"], "method": run.method,
+           "expect": run.expect, "outputs": [str(p) for p in run.outputs]}
+    if change.size:
+        doc["period_change_quantiles"] = dict(zip(
+            ("p05", "p50", "p95"), np.quantile(change, [0.05, 0.5, 0.95]).tolist()))
+    return doc
 
 
 def run_binary(scenario: BinaryScenario, *, output=None, write_outputs: bool = True
@@ -703,12 +841,17 @@ def run_binary(scenario: BinaryScenario, *, output=None, write_outputs: bool = T
     >>> run.ok, [p.name for p in run.outputs]
     (True, ['b.nc'])
     """
+    if scenario.ensemble is not None:
+        return _run_ensemble(scenario, output, write_outputs)
     eph = propagate_binary(scenario.system, scenario.state, scenario.times,
                            method=scenario.method, rtol=scenario.rtol, step=scenario.step,
                            events=list(scenario.impulses))
     eph.dataset.attrs["title"] = f"attitude ephemeris: binary system, {scenario.name}"
     times = [imp.seconds_after(scenario.state.epoch) for imp in scenario.impulses]
-    d = diagnose(eph, impulses=times)
+    chaos = any(e.key == "lyapunov_exponent" or (e.key == "secondary_regime"
+                                                 and e.value == "chaotic")
+                for e in scenario.expect)
+    d = diagnose(eph, impulses=times, chaos=chaos, system=scenario.system)
     change = None
     if times and scenario.times[0] < min(times) <= scenario.times[-1]:
         change = period_change(eph, min(times))
@@ -733,7 +876,8 @@ def _check(e: Expectation, d, change) -> dict:
         got = getattr(d, key)
     if got is None or not math.isfinite(got):
         return e.check(None)
-    si = {"libration_amplitude": u.rad, "apsidal_rate": u.rad / u.s}.get(key, u.s)
+    si = {"libration_amplitude": u.rad, "apsidal_rate": u.rad / u.s,
+          "lyapunov_exponent": 1 / u.s}.get(key, u.s)
     return e.check(float((got * si).to_value(e.unit)))
 
 

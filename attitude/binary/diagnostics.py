@@ -59,8 +59,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from attitude.binary.chaos import lyapunov_exponent
 from attitude.binary.dynamics import matrix
+from attitude.binary.system import BinarySystem
 from attitude.foundations.errors import BinarySystemError
+from attitude.model.body import RigidBody
 from attitude.model.ephemeris import Ephemeris
 
 __all__ = ["BinaryDiagnosis", "PeriodChange", "diagnose", "libration_angle", "orbit_period",
@@ -68,7 +71,7 @@ __all__ = ["BinaryDiagnosis", "PeriodChange", "diagnose", "libration_angle", "or
            "TUMBLING_ANGLE", "PRINCIPAL_ANGLE", "CIRCULAR_ECCENTRICITY"]
 
 #: The secondary's regimes, from locked to tumbling.
-REGIMES = ("librating", "non-principal", "circulating", "tumbling")
+REGIMES = ("librating", "non-principal", "circulating", "tumbling", "chaotic")
 #: rad: the angular velocity farther than this from its principal axis is a tumble.
 TUMBLING_ANGLE = math.radians(30.0)
 #: rad: a locked secondary whose rate or largest-moment axis leaves its axis / the orbit
@@ -107,6 +110,11 @@ class BinaryDiagnosis:
         ``energy_rel_drift`` and ``angular_momentum_rel_drift``: the largest relative
         change of the total energy and angular momentum, within each stretch between
         impulses.
+    lyapunov_exponent : float
+        1/s, the finite-time Lyapunov exponent (``diagnose(..., chaos=True)``; NaN
+        otherwise).
+    lyapunov : BinaryLyapunov or None
+        Its details (:func:`attitude.binary.chaos.lyapunov_exponent`).
 
     Examples
     --------
@@ -129,6 +137,8 @@ class BinaryDiagnosis:
     max_spin_axis_angle: float
     max_tilt: float
     conservation: dict
+    lyapunov_exponent: float = math.nan
+    lyapunov: object = None
 
     def periods(self) -> dict:
         """The periods of the report: ``orbit``, ``osculating``, ``libration``,
@@ -517,7 +527,30 @@ def _spin_period(w) -> float:
     return 2 * math.pi / mean if mean > 0 else math.inf
 
 
-def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
+def _chaos(ds, system, intervals: int):
+    """The Lyapunov exponent of the run in ``ds`` (from its first sample, with its
+    method and step; the system rebuilt from the ephemeris at order 2)."""
+    if system is None:
+        if int(ds.attrs.get("mutual_potential_order", 0)) != 2:
+            raise BinarySystemError("chaos: give system= (the ephemeris holds each body's "
+                                    "mass and inertia, the whole system only at order 2)")
+        masses = np.asarray(ds.attrs["masses"], dtype=float)
+        inertia = np.asarray(ds["inertia"].values, dtype=float).reshape(2, 3, 3)
+        system = BinarySystem(RigidBody(inertia[0], mass=masses[0]),
+                              RigidBody(inertia[1], mass=masses[1]), order=2,
+                              G=float(ds.attrs["gravitational_constant"]))
+    t = np.asarray(ds["time"].values, dtype=float)
+    R, V = ds["relative_position"].values[0], ds["relative_velocity"].values[0]
+    q = np.asarray(ds["quaternion"].values[:, 0], dtype=float)
+    w = np.asarray(ds["angular_velocity"].values[:, 0], dtype=float)
+    y0 = np.concatenate([R, V, q[0], w[0], q[1], w[1]])
+    method = str(ds.attrs.get("method", "lgvi"))
+    return lyapunov_exponent(system, y0, t - t[0], intervals=intervals, method=method,
+                             step=ds.attrs.get("step") if method == "lgvi" else None)
+
+
+def diagnose(eph, *, impulses=(), chaos: bool = False, system=None,
+             intervals: int = 64) -> BinaryDiagnosis:
     """Diagnose a binary's ephemeris: the mutual orbit's periods and apsidal rate, the
     secondary's libration and regime, both spins, the conservation figures.
 
@@ -530,6 +563,17 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
         measured within each stretch between them, and the orbit and the secondary after
         the last one (the motion the impulses left; :func:`period_change` compares both
         sides).
+    chaos : bool
+        Measure the finite-time Lyapunov exponent (:mod:`attitude.binary.chaos`) from
+        the first sample (after the last impulse) to the end, renormalised at
+        ``intervals`` shares of the samples, with the run's method and step: it costs
+        two more propagations of the system and two of its Keplerian control.  A chaotic
+        exponent makes the regime ``chaotic``.
+    system : BinarySystem, optional
+        The run's system; needed by ``chaos`` beyond order 2 (at order 2 the ephemeris's
+        masses and inertia are the whole system).
+    intervals : int
+        Renormalisations of ``chaos``.
 
     Returns
     -------
@@ -538,7 +582,7 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
     Raises
     ------
     BinarySystemError
-        Not a binary's ephemeris.
+        Not a binary's ephemeris; ``chaos`` beyond order 2 without ``system``.
 
     Examples
     --------
@@ -576,6 +620,9 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
     regime, unwrapped, circulates, spin_angle, tilt = _regime(ds)
     period = _sidereal_period(t, R, V)
     w = np.asarray(ds["angular_velocity"].values, dtype=float)
+    lyapunov = _chaos(ds, system, intervals) if chaos else None
+    if lyapunov is not None and lyapunov.chaotic:
+        regime = "chaotic"
     return BinaryDiagnosis(
         orbit_period=period,
         osculating_period=_kepler_period(R0[0], V0[0], mu),
@@ -589,6 +636,8 @@ def diagnose(eph, *, impulses=()) -> BinaryDiagnosis:
         max_spin_axis_angle=spin_angle,
         max_tilt=tilt,
         conservation=conservation,
+        lyapunov_exponent=math.nan if lyapunov is None else lyapunov.exponent,
+        lyapunov=lyapunov,
     )
 
 

@@ -25,7 +25,7 @@ from attitude.foundations.quantities import DEFAULT_TIME_SCALE, to_si, to_time
 from attitude.model.body import RigidBody
 from attitude.model.state import as_epoch, as_omega, check_frame
 
-__all__ = ["BinarySystem", "BinaryState", "Impulse", "BODIES"]
+__all__ = ["BinarySystem", "BinaryState", "Impulse", "BODIES", "impact_delta_v"]
 
 #: The names of the two bodies, in the order of the ephemeris's ``body`` dimension.
 BODIES = ("primary", "secondary")
@@ -241,3 +241,23 @@ def _impulse_time(value) -> float | Time:
                                     f"{value.shape}")
         return value
     return float(to_si(value, "s", name="time", shape=(), error=BinarySystemError))
+
+
+def impact_delta_v(impactor_mass: float, impactor_velocity, beta: float, body_mass: float,
+                   ejecta_direction=None) -> np.ndarray:
+    """A kinetic impact's velocity change of the body, m/s (Cheng et al. 2023, eq. 1):
+    ``M dv = m U + m (beta - 1) (E . U) E``, with ``E`` the ejecta's direction (default:
+    the impactor's, so ``dv = beta m U / M``).
+
+    Examples
+    --------
+    >>> impact_delta_v(580.0, [0.0, -6145.0, 0.0], 3.61, 4.3e9).round(7).tolist()
+    [0.0, -0.0029923, 0.0]
+    """
+    U = np.asarray(impactor_velocity, dtype=float)
+    E = U if ejecta_direction is None else np.asarray(ejecta_direction, dtype=float)
+    norm = np.linalg.norm(E)
+    if not norm > 0:
+        return impactor_mass * U / body_mass
+    E = E / norm
+    return impactor_mass * (U + (beta - 1) * (E @ U) * E) / body_mass

@@ -21,8 +21,29 @@ def _period(seconds: float) -> str:
     return "not measured" if not math.isfinite(seconds) else format_seconds(seconds, 7)
 
 
+def ensemble_rows(run, scenario) -> list[tuple[str, str]]:
+    """The summary of a ``[binary.ensemble]`` run as ``(label, value)`` rows."""
+    doc = run.report()
+    counts = doc["status"]
+    rows = [("Scenario", f"{run.name}  ({scenario.path})"),
+            ("Members", f"{doc['members']}: {counts['ok']} ran, {counts['invalid_input']} "
+                        f"bad input, {counts['failed']} failed; drawn: "
+                        f"{', '.join(scenario.ensemble['sigma'])}"),
+            ("Run", f"{len(scenario.times)} epochs over "
+                    f"{format_seconds(float(scenario.times[-1]))} each, method {run.method}")]
+    if "period_change_quantiles" in doc:
+        q = doc["period_change_quantiles"]
+        rows.append(("Impulse", f"period change (5, 50, 95 %): {q['p05'] / 60:+.4g}, "
+                                f"{q['p50'] / 60:+.4g}, {q['p95'] / 60:+.4g} min"))
+    shares = ", ".join(f"{k} {v:.3g}" for k, v in doc["regime_fractions"].items())
+    rows.append(("Secondary", f"regimes: {shares or 'none ran'}"))
+    return rows
+
+
 def summary_rows(run, scenario) -> list[tuple[str, str]]:
     """The summary of a binary run as ``(label, value)`` rows."""
+    if run.ensemble is not None:
+        return ensemble_rows(run, scenario)
     d, eph = run.diagnosis, run.ephemeris
     m1, m2 = scenario.system.masses
     rows = [("Scenario", f"{run.name}  ({scenario.path})"),
