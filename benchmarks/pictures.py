@@ -11,8 +11,9 @@ The GIFs are the Poinsot construction for the three regimes of one triaxial body
 moments of Apophis, 0.61 : 0.965 : 1), each under 1 MB, and two real bodies from their
 scenario files: Apophis's tumbling state (scenarios/apophis.toml, torque-free, its shape
 the ellipsoid of its moments) and Hyperion tumbling chaotically under Saturn's gravity
-gradient (scenarios/hyperion.toml: E and L change, and the construction follows them).  The timings print the wall
-time of ``Ephemeris.animate`` on the 30-day run of scenarios/apophis.toml to a 20 s MP4
+gradient (scenarios/hyperion.toml: E and L change, and the construction follows them).
+The timings print the wall time of ``Ephemeris.animate`` on the 30-day run of
+scenarios/apophis.toml to a 20 s MP4
 (20 frames/s) and the size of the HTML view of a 10^4-epoch ephemeris.
 """
 

@@ -28,7 +28,7 @@ from scipy.spatial.transform import Rotation
 
 from attitude.binary.diagnostics import REGIMES, diagnose, period_change
 from attitude.binary.dynamics import mutual_forces
-from attitude.binary.propagate import propagate_binary
+from attitude.binary.propagate import propagate_binary, propagate_family
 from attitude.binary.system import BinaryState, BinarySystem, Impulse, impact_delta_v
 from attitude.foundations.errors import AttitudeError, BinarySystemError
 from attitude.model.body import MassProperties, RigidBody
@@ -135,8 +135,9 @@ def _split(member):
     return system, state, impulses, inputs
 
 
-def _run_member(member, times, options: dict) -> dict:
-    """One member's outcome row (never raises)."""
+def _run_member(member, times, options: dict, eph=None) -> dict:
+    """One member's outcome row (never raises); ``eph`` its ephemeris when the family
+    already ran it."""
     row = {k: math.nan for k in _FLOATS}
     row.update(status=STATUS_OK, secondary_regime="", message="", inputs={})
     try:
@@ -148,7 +149,8 @@ def _run_member(member, times, options: dict) -> dict:
         row.update(status=STATUS_INVALID, message=str(err))
         return row
     try:
-        eph = propagate_binary(system, state, times, events=impulses, **options["run"])
+        if eph is None:
+            eph = propagate_binary(system, state, times, events=impulses, **options["run"])
     except BinarySystemError as err:
         row.update(status=STATUS_INVALID, message=str(err))
         return row
@@ -174,7 +176,44 @@ def _run_member(member, times, options: dict) -> dict:
 def _run_chunk(members, times, options) -> list:
     # a failing member's NaNs: its status says so, not a warning per member
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return [_run_member(m, times, options) for m in members]
+        ran = _families(members, times, options)
+        return [_run_member(m, times, options, ran.get(i)) for i, m in enumerate(members)]
+
+
+def _families(members, times, options) -> dict:
+    """With the LGVI at a given step (and no chaos measurement), the members of each
+    family (one order and G, impulses at the same times, so that each member takes the
+    steps it takes alone) run all at once (:func:`propagate_family`): ``{index:
+    ephemeris}``.  A family that fails as a whole (a member falls into the other body)
+    is left to run member by member, so that only that member fails."""
+    run = options["run"]
+    if (options["chaos"] or run["step"] is None or run["rtol"] is not None
+            or run["method"] not in (None, "lgvi")):
+        return {}
+    families: dict = {}
+    for i, member in enumerate(members):
+        try:
+            system, state, impulses, _ = _split(member)
+        except BinarySystemError:
+            continue
+        try:
+            when = tuple(sorted(e.seconds_after(state.epoch) for e in impulses))
+        except Exception:  # noqa: BLE001  (a bad impulse: the member alone says why)
+            continue
+        families.setdefault((system.order, system.G, when), []).append(
+            (i, system, state, impulses))
+    out = {}
+    for group in families.values():
+        if len(group) < 2:
+            continue
+        index, systems, states, impulses = zip(*group)
+        try:
+            ephs = propagate_family(systems, states, times, step=run["step"], events=impulses)
+        except Exception:  # noqa: BLE001  (the members then run one by one)
+            continue
+        if all(np.all(np.isfinite(e.dataset["relative_position"].values)) for e in ephs):
+            out.update(zip(index, ephs))
+    return out
 
 
 def _client(client):
@@ -199,7 +238,10 @@ def ensemble(members, times, *, method: str | None = None, rtol: float | None = 
     times : array-like
         s since each state's epoch (:func:`attitude.propagate`'s ``times``).
     method, rtol, step :
-        Of :func:`attitude.propagate` for a binary, the same for every member.
+        Of :func:`attitude.propagate` for a binary, the same for every member.  With the
+        LGVI at a given ``step`` the members of one family (one order and ``G``, their
+        impulses at the same times) run all at once, vectorised
+        (:func:`attitude.binary.propagate.propagate_family`).
     chaos : bool
         Measure each member's Lyapunov exponent (``diagnose(..., chaos=True)``: three
         times the cost).

@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from attitude.binary.dynamics import energy_momentum, integrate_dop853, pack, unpack
-from attitude.binary.lgvi import default_step, integrate_lgvi
+from attitude.binary.lgvi import default_step, integrate_lgvi, integrate_lgvi_batch
 from attitude.binary.system import BODIES, BinaryState, BinarySystem, Impulse
 from attitude.foundations import quaternion as quat
 from attitude.foundations.errors import BinarySystemError
@@ -23,7 +23,7 @@ from attitude.foundations.quantities import to_si
 from attitude.model.ephemeris import Ephemeris
 from attitude.propagation.propagator import elapsed_seconds
 
-__all__ = ["propagate_binary", "METHODS", "apply_impulse", "initial_vector"]
+__all__ = ["propagate_binary", "propagate_family", "METHODS", "apply_impulse", "initial_vector"]
 
 #: Methods of :func:`propagate_binary` (the first is the default).
 METHODS = ("lgvi", "integrator")
@@ -129,6 +129,67 @@ def propagate_binary(system: BinarySystem, state: BinaryState, times, *,
     >>> bool(np.abs(L - L[0]).max() < 1e-9 * np.linalg.norm(L[0]))
     True
     """
+    method, t, impulses, y0 = _prepared(system, state, times, method, rtol, step, events)
+    if method == "lgvi":
+        h = _step_seconds(step) if step is not None else default_step(system, y0)
+        y = integrate_lgvi(system, y0, t, h, impulses)
+        return binary_ephemeris(system, state, t, y, method=method, step=h)
+    y = _integrate(system, y0, t, impulses, rtol)
+    return binary_ephemeris(system, state, t, y, method=method)
+
+
+def propagate_family(systems, states, times, *, step, events=None) -> list[Ephemeris]:
+    """Propagate many binaries of one family (one mutual-potential order and ``G``) with
+    the LGVI at a common ``step``, all at once (:func:`attitude.binary.lgvi.
+    integrate_lgvi_batch`): the ephemeris of each, as :func:`propagate_binary` gives it,
+    except that each member's steps also end at the other members' impulse times.
+
+    Parameters
+    ----------
+    systems, states : sequences of BinarySystem and BinaryState (same length)
+    times : array-like
+        s since each state's epoch, sorted, >= 0.
+    step : float (s), Quantity or str
+    events : sequence of sequences of Impulse, optional
+        Each member's impulses.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(5e11, 400.0))
+    >>> eggs = [att.RigidBody.from_mass_properties(
+    ...     att.MassProperties.solid_ellipsoid(4.3e9, [a, 80.0, 66.0])) for a in (95.0, 110.0)]
+    >>> systems = [att.BinarySystem(ball, egg) for egg in eggs]
+    >>> n = np.sqrt(systems[0].mu / 1190.0**3)
+    >>> state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+    ...                         Rotation.identity(), [0, 0, 7.7e-4], Rotation.identity(),
+    ...                         [0, 0, n])
+    >>> ephs = propagate_family(systems, [state, state], np.linspace(0.0, 3600.0, 7),
+    ...                         step=30.0)
+    >>> len(ephs), ephs[1].dataset.attrs["method"]
+    (2, 'lgvi')
+    """
+    systems, states = list(systems), list(states)
+    if len(systems) != len(states) or not systems:
+        raise BinarySystemError("systems, states: expected two sequences of one length")
+    events = [None] * len(systems) if events is None else list(events)
+    if len(events) != len(systems):
+        raise BinarySystemError("events: one sequence of impulses per member")
+    prepared = [_prepared(sy, st, times, "lgvi", None, step, ev)
+                for sy, st, ev in zip(systems, states, events)]
+    t = prepared[0][1]
+    if any(not np.array_equal(p[1], t) for p in prepared):
+        raise BinarySystemError("times: the members of a family share their times")
+    h = _step_seconds(step)
+    y = integrate_lgvi_batch(systems, np.array([p[3] for p in prepared]), t, h,
+                             [p[2] for p in prepared])
+    return [binary_ephemeris(sy, st, t, yy, method="lgvi", step=h)
+            for sy, st, yy in zip(systems, states, y)]
+
+
+def _prepared(system, state, times, method, rtol, step, events) -> tuple:
+    """The checked inputs of one run: ``(method, t, impulses, y0)``."""
     if not isinstance(system, BinarySystem):
         raise BinarySystemError(f"system: expected a BinarySystem, got {type(system).__name__}")
     if not isinstance(state, BinaryState):
@@ -151,13 +212,7 @@ def propagate_binary(system: BinarySystem, state: BinaryState, times, *,
         if s < 0:
             raise BinarySystemError("events: an impulse before the state's epoch; the "
                                     "propagation runs forward")
-    y0 = initial_vector(state)
-    if method == "lgvi":
-        h = _step_seconds(step) if step is not None else default_step(system, y0)
-        y = integrate_lgvi(system, y0, t, h, impulses)
-        return binary_ephemeris(system, state, t, y, method=method, step=h)
-    y = _integrate(system, y0, t, impulses, rtol)
-    return binary_ephemeris(system, state, t, y, method=method)
+    return method, t, impulses, initial_vector(state)
 
 
 def _step_seconds(step) -> float:
