@@ -71,10 +71,14 @@ def synthetic(truth, t, noise=0.01, seed=1):
 
 
 def angle_between(lon_lat_a, lon_lat_b):
-    """deg between two (longitude, latitude) directions in deg."""
-    (l1, b1), (l2, b2) = np.radians(lon_lat_a), np.radians(lon_lat_b)
-    c = np.sin(b1) * np.sin(b2) + np.cos(b1) * np.cos(b2) * np.cos(l1 - l2)
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    """deg between two (longitude, latitude) directions in deg, as atan2(|a x b|, a.b):
+    accurate near zero (an arccos of the dot product resolves no better than ~1e-6 deg:
+    sqrt(2 eps))."""
+    def unit(lon_lat):
+        lon, lat = np.radians(lon_lat)
+        return np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
+    a, b = unit(lon_lat_a), unit(lon_lat_b)
+    return float(np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b)))
 
 
 def one_percent_off(truth):
