@@ -107,8 +107,9 @@ def _shift_torque(torque, t0: float):
     return tq.as_torque_model(torque).shifted(t0)
 
 
-def _batch_means(g: np.ndarray) -> float:
-    """Standard error of the mean of correlated local exponents (batch means)."""
+def batch_means_error(g: np.ndarray) -> float:
+    """Standard error of the mean of correlated local exponents (batch means: 2 to 8
+    batches); also the binary wing's (:mod:`attitude.binary.chaos`)."""
     n = g.size
     if n < 2:
         return math.inf
@@ -269,7 +270,7 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
     local, tau = _ftle(body, state, torques, duration, int(intervals), separation,
                        rate_scale, method, rtol if torques else None, seed, step)
     lam = float(local.mean())
-    sig = _batch_means(local)
+    sig = batch_means_error(local)
     c_local = None
     lam_c = sig_c = None
     if control is not None:
@@ -281,7 +282,7 @@ def lyapunov_exponent(body: RigidBody, state: AttitudeState, torques: Sequence |
         c_local, _ = _ftle(cb, cs, ct, duration, int(intervals), separation, rate_scale,
                            None if not ct else method, rtol if ct else None, seed, step)
         lam_c = float(c_local.mean())
-        sig_c = _batch_means(c_local)
+        sig_c = batch_means_error(c_local)
     comb = math.hypot(sig, sig_c or 0.0)
     excess = lam - (lam_c or 0.0)
     significance = excess / comb if comb > 0 else (math.inf if excess > 0 else 0.0)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from attitude.analysis.lyapunov import batch_means_error
 from attitude.binary.dynamics import integrate_dop853, pack, unpack
 from attitude.binary.lgvi import default_step, integrate_lgvi
 from attitude.binary.propagate import initial_vector
@@ -112,17 +113,6 @@ def kepler_control(system: BinarySystem) -> BinarySystem:
         radius = math.sqrt(2.5 * float(np.trace(body.inertia)) / 3.0 / m)
         bodies.append(RigidBody.from_mass_properties(MassProperties.solid_sphere(m, radius)))
     return BinarySystem(*bodies, order=2, G=system.G)
-
-
-def _batch_means(g: np.ndarray) -> float:
-    """Standard error of the mean of correlated local exponents: 2 to 8 batches (the
-    convention of :mod:`attitude.analysis.lyapunov`)."""
-    if g.size < 2:
-        return math.inf
-    nb = max(2, min(8, g.size // 4))
-    size = g.size // nb
-    means = g[: nb * size].reshape(nb, size).mean(axis=1)
-    return float(means.std(ddof=1) / math.sqrt(nb))
 
 
 def _scales(system: BinarySystem, y0: np.ndarray) -> tuple[float, float, float]:
@@ -280,14 +270,14 @@ def lyapunov_exponent(system: BinarySystem, state, times, *, intervals: int = 64
     widths = np.diff(t[bounds])
     duration = float(t[bounds[-1]])
     lam = float(np.sum(local * widths) / duration)
-    sig = _batch_means(local)
+    sig = batch_means_error(local)
     lam_c = sig_c = None
     if control:
         c_system = kepler_control(system)
         c_h = default_step(c_system, y0) if h is None else h
         c_local = _ftle(c_system, y0, t, bounds, separation, method, c_h, rtol, seed)
         lam_c = float(np.sum(c_local * widths) / duration)
-        sig_c = _batch_means(c_local)
+        sig_c = batch_means_error(c_local)
     excess = (lam - (lam_c or 0.0)) * duration
     chaotic = bool(excess >= th.lyapunov_efolds
                    and lam > th.lyapunov_ratio * max(lam_c or 0.0, 0.0))
