@@ -193,6 +193,8 @@ WING_USES = {
     ("fitting", "photometry"),
     # inversion reads observations with photometry's geometry (Sun and observer directions)
     ("inversion", "photometry"),
+    # the binary page draws the binary wing's libration angle of its ephemeris
+    ("pictures", "binary"),
 }
 
 #: Top-level modules: the user's namespaces (anything may be re-exported; nothing in the

@@ -61,6 +61,7 @@ import numpy as np
 
 from attitude.binary.chaos import lyapunov_exponent
 from attitude.binary.dynamics import matrix
+from attitude.binary.propagate import is_binary_dataset
 from attitude.binary.system import BinarySystem
 from attitude.foundations.errors import BinarySystemError
 from attitude.model.body import RigidBody
@@ -183,7 +184,7 @@ class PeriodChange:
 
 def _binary_dataset(eph):
     ds = eph.dataset if isinstance(eph, Ephemeris) else eph
-    if ds.attrs.get("system") != "binary" or "relative_position" not in ds:
+    if not is_binary_dataset(ds):
         raise BinarySystemError("ephemeris: not a binary system's ephemeris (it needs "
                                 "relative_position and the attribute system = 'binary'; "
                                 "propagate a BinarySystem)")

@@ -295,5 +295,17 @@ def binary_ephemeris(system: BinarySystem, state: BinaryState, t: np.ndarray, y:
 
 
 def is_binary_dataset(ds: xr.Dataset) -> bool:
-    """Whether an ephemeris dataset holds a binary system."""
+    """Whether an ephemeris dataset holds a binary system (what
+    :func:`binary_ephemeris` writes: the attribute ``system = "binary"`` and the
+    ``relative_position``); the one test of the wing and of the pictures' binary page.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
+    >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0, 0, 0.1])
+    >>> is_binary_dataset(att.propagate(body, state, [0.0, 1.0]).dataset)
+    False
+    """
     return ds.attrs.get("system") == "binary" and "relative_position" in ds

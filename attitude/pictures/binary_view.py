@@ -6,37 +6,23 @@ origin and the secondary at the relative position, each drawn as the uniform ell
 of its principal moments and mass (true size) with its long axis; the whole mutual orbit
 as a line; a line from the secondary toward the primary.  Below, against time with a
 cursor: the separation and the secondary's libration angle (its long axis against the
-direction to the primary, in the orbit plane).  A binary ephemeris is recognised by its
-``relative_position`` variable and ``masses`` attribute (what ``att.propagate`` of a
-``BinarySystem`` writes); this module reads only the dataset, not the binary wing.
+direction to the primary, in the orbit plane: the binary wing's
+:func:`attitude.binary.diagnostics.libration_angle`).  A binary ephemeris is recognised
+by :func:`attitude.binary.propagate.is_binary_dataset`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..binary.diagnostics import libration_angle
+from ..binary.propagate import is_binary_dataset
 from ..foundations import quaternion as quat
 from ..foundations.errors import EphemerisFormatError
 from .page import MAX_LINE_POINTS, animation_controls, float32, mesh_faces, plotly_modules, thinned
 from .poinsot import ellipsoid_surface, surface_quads
 
-__all__ = ["is_binary", "binary_view", "solid_semi_axes", "libration_series"]
-
-
-def is_binary(eph) -> bool:
-    """Whether ``eph`` holds a binary system (two bodies and their mutual orbit).
-
-    Examples
-    --------
-    >>> import numpy as np, attitude as att
-    >>> from scipy.spatial.transform import Rotation
-    >>> body = att.RigidBody.from_principal_moments([1.0, 2.0, 3.0])
-    >>> state = att.AttitudeState("2030-01-01", Rotation.identity(), [0, 0, 0.1])
-    >>> is_binary(att.propagate(body, state, [0.0, 1.0]))
-    False
-    """
-    ds = eph.dataset
-    return "relative_position" in ds and "masses" in ds.attrs and ds.sizes.get("body") == 2
+__all__ = ["binary_view", "solid_semi_axes"]
 
 
 def solid_semi_axes(moments, mass: float) -> np.ndarray:
@@ -53,45 +39,6 @@ def solid_semi_axes(moments, mass: float) -> np.ndarray:
     A, B, C = np.asarray(moments, dtype=float)
     squares = 2.5 / mass * np.array([B + C - A, A + C - B, A + B - C])
     return np.sqrt(np.maximum(squares, 0.0))
-
-
-def libration_series(eph) -> np.ndarray:
-    """The secondary's libration angle at the samples, rad in (-pi/2, pi/2]: in the
-    mutual orbit plane (normal along the mean ``R x V``), the angle from the direction to
-    the primary (``-R``) to the secondary's long axis (the axis of its smallest moment;
-    either end, so the angle is taken modulo pi).
-
-    Examples
-    --------
-    >>> import numpy as np, attitude as att
-    >>> from scipy.spatial.transform import Rotation
-    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e12, 500.0))
-    >>> egg = att.RigidBody.from_mass_properties(
-    ...     att.MassProperties.solid_ellipsoid(1e9, [100.0, 80.0, 60.0]))
-    >>> system = att.BinarySystem(ball, egg)
-    >>> n = np.sqrt(system.mu / 1200.0**3)
-    >>> tilt = Rotation.from_euler("z", 10.0, degrees=True)       # long axis 10 deg off
-    >>> state = att.BinaryState("2026-12-01", [1200.0, 0, 0], [0, n * 1200.0, 0],
-    ...                         Rotation.identity(), [0, 0, 0], tilt, [0, 0, n])
-    >>> eph = att.propagate(system, state, [0.0], method="integrator")
-    >>> float(np.degrees(libration_series(eph)[0]).round(9))
-    10.0
-    """
-    ds = eph.dataset
-    R = np.asarray(ds["relative_position"].values, float)
-    V = np.asarray(ds["relative_velocity"].values, float)
-    normal = np.cross(R, V).mean(axis=0)
-    normal /= np.linalg.norm(normal)
-    inertia = np.asarray(ds["inertia"].values[1], float).reshape(3, 3)
-    long_axis = np.linalg.eigh(inertia)[1][:, 0]
-    q = np.asarray(ds["quaternion"].values[1], float)
-    axis = quat.rotate(q, np.broadcast_to(long_axis, q.shape[:-1] + (3,)))
-    toward = -R
-    x = toward - np.outer(toward @ normal, normal)
-    x /= np.linalg.norm(x, axis=-1, keepdims=True)
-    y = np.cross(normal, x)
-    angle = np.arctan2(np.sum(axis * y, -1), np.sum(axis * x, -1))
-    return (angle + np.pi / 2) % np.pi - np.pi / 2
 
 
 def binary_view(eph, *, max_frames: int = 150):
@@ -114,7 +61,7 @@ def binary_view(eph, *, max_frames: int = 150):
     >>> len(fig.frames), {"primary", "secondary", "mutual orbit"} <= {d.name for d in fig.data}
     (4, True)
     """
-    if not is_binary(eph):
+    if not is_binary_dataset(eph.dataset):
         raise EphemerisFormatError("not a binary ephemeris: expected relative_position and "
                                    "the masses attribute (att.propagate of a BinarySystem)")
     go, make_subplots = plotly_modules()
@@ -128,7 +75,7 @@ def binary_view(eph, *, max_frames: int = 150):
     masses = np.asarray(ds.attrs["masses"], float)
     moments = np.asarray(ds["principal_moments"].values, float)
     inertia = np.asarray(ds["inertia"].values, float).reshape(2, 3, 3)
-    libration = np.degrees(libration_series(eph))
+    libration = np.degrees(libration_angle(eph))
     fig = make_subplots(rows=2, cols=1, row_heights=[0.68, 0.32],
                         specs=[[{"type": "scene"}], [{"type": "xy", "secondary_y": True}]],
                         subplot_titles=("primary and secondary (inertial frame, km)",

@@ -24,8 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..binary.propagate import is_binary_dataset
 from ..foundations import quaternion as quat
-from .binary_view import binary_view, is_binary
+from .binary_view import binary_view
 from .motion import body_polygons, ephemeris_inertia, nutation_series, sample_motion
 from .page import (
     MAX_LINE_POINTS,
@@ -82,7 +83,7 @@ def view(eph, path=None, *, body_index: int | None = None, max_frames: int = 150
     >>> v.path == out and "plotly" in out.read_text()[:100000]
     True
     """
-    if is_binary(eph):          # two bodies on their mutual orbit
+    if is_binary_dataset(eph.dataset):          # two bodies on their mutual orbit
         out = View(binary_view(eph, max_frames=max_frames))
         if path is not None:
             out.save(path)

@@ -9,7 +9,8 @@ pytest.importorskip("plotly")
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 import attitude as att  # noqa: E402
-from attitude.pictures.binary_view import libration_series, solid_semi_axes  # noqa: E402
+from attitude.binary.diagnostics import libration_angle  # noqa: E402
+from attitude.pictures.binary_view import solid_semi_axes  # noqa: E402
 from attitude.pictures.viewer import view  # noqa: E402
 
 SEMI = np.array([103.16, 79.35, 66.13])
@@ -59,7 +60,7 @@ def test_libration_angle_is_the_long_axis_against_the_primary_direction():
     primary (either end of the axis counts); later the angle follows the independent
     construction from the rotation matrices."""
     eph = _ephemeris(yaw_deg=-20.0)
-    angle = libration_series(eph)
+    angle = libration_angle(eph)
     assert abs(np.degrees(angle[0]) + 20.0) < 1e-9
     second = att.Ephemeris(eph.dataset.isel(body=1))
     R = eph.dataset.relative_position.values
