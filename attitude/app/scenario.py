@@ -47,7 +47,7 @@ from ..model.regimes import PERIOD_KEYS
 from ..model.sampling import DEFAULTS as _ENSEMBLE_DEFAULTS
 from ..model.sampling import DIRECTION_SIGMA as _ENSEMBLE_DIRECTION
 from ..model.sampling import MODELS
-from ..model.state import AttitudeState, check_frame, spin_axis_quaternion
+from ..model.state import AttitudeState, check_frame, rotation_from_table, spin_axis_quaternion
 from ..model.tables import COLUMNS
 from ..model.torques import BuildContext, from_config
 from ..photometry.config import EXPECT_KEYS as LIGHTCURVE_EXPECT_KEYS
@@ -403,19 +403,7 @@ def _parts(r: _Reader, parts) -> list[MassProperties]:
 
 def _rotation(r: _Reader, table: dict, key: str) -> Rotation:
     """A validated :data:`~attitude.app.scenario_spec.ROTATION` table -> scipy Rotation."""
-    if "euler" in table:
-        try:
-            return Rotation.from_euler(table["euler"], table["angles"])
-        except (ValueError, TypeError) as exc:
-            raise r.fail(f"{key}.euler", f"{exc}; write a scipy sequence such as 'ZXZ' "
-                                         "with one angle per axis") from None
-    form = next(k for k in ("quaternion_scalar_last", "quaternion_scalar_first") if k in table)
-    q = np.asarray(table[form])
-    norm = np.linalg.norm(q)
-    if abs(norm - 1) > 1e-6:
-        raise r.fail(f"{key}.{form}", f"quaternion {q.tolist()} has norm {norm:.9g}, not 1; "
-                                      "normalise it and check the component order")
-    return Rotation.from_quat(q, scalar_first=(form == "quaternion_scalar_first"))
+    return rotation_from_table(table, key, r.fail)
 
 
 _SPIN_KEYS = ("spin_axis", "spin_rate", "spin_period", "spin_about")

@@ -26,6 +26,7 @@ from ..foundations.spec import Key, Table
 from ..model.body import MassProperties
 from ..model.regimes import PERIOD_KEYS, REGIMES
 from ..model.sampling import DIRECTION_SIGMA, MODELS
+from ..model.state import ATTITUDE_TABLE
 from ..model.torques import TORQUE_TABLES
 from ..photometry import config as photometry_config
 from ..propagation.propagator import METHODS
@@ -54,18 +55,9 @@ SCENARIO_TABLE = Table("scenario", (
     Key("description", "string"),
 ))
 
-#: An attitude (body -> inertial): a quaternion or Euler angles.
-ROTATION = Table("rotation", (
-    Key("quaternion_scalar_last", "quantity", unit="", shape=(4,), doc="x, y, z, w"),
-    Key("quaternion_scalar_first", "quantity", unit="", shape=(4,), doc="w, x, y, z"),
-    Key("euler", "string", doc="scipy sequence: upper case intrinsic ('ZXZ'), lower case "
-                               "extrinsic"),
-    Key("angles", "quantity", unit="rad", shape=((), (1,), (2,), (3,)),
-        doc="the Euler angles, one per axis of `euler`"),
-), exactly_one=(("quaternion_scalar_last", "quaternion_scalar_first", "euler"),),
-    needs=(("euler", ("angles",)), ("angles", ("euler",))),
-    doc="body -> inertial: one of quaternion_scalar_last, quaternion_scalar_first, or euler "
-        "with angles")
+#: An attitude (body -> inertial): a quaternion or Euler angles (the model layer's
+#: declaration, shared with the binary wing's scenario files).
+ROTATION = ATTITUDE_TABLE
 
 #: One part of a composite body (``[body] parts``).
 PART = Table("part", (

@@ -112,6 +112,7 @@ from attitude.foundations.spec import Key, Table, markdown, validate
 from attitude.model.body import MassProperties, RigidBody
 from attitude.model.ephemeris import write_atomically
 from attitude.model.orbit import KeplerOrbit
+from attitude.model.state import ATTITUDE_TABLE, rotation_from_table
 
 __all__ = ["BINARY", "EXPECT", "BinaryScenario", "BinaryRun", "is_binary", "load_binary",
            "binary_reference",
@@ -126,17 +127,8 @@ METHODS = AVAILABLE_METHODS
 DEFAULT_RTOL = 1e-10
 
 #: An attitude (body -> inertial): a quaternion or Euler angles (the single-body
-#: scenario's form).
-ROTATION = Table("attitude", (
-    Key("quaternion_scalar_last", "quantity", unit="", shape=(4,), doc="x, y, z, w"),
-    Key("quaternion_scalar_first", "quantity", unit="", shape=(4,), doc="w, x, y, z"),
-    Key("euler", "string", doc="scipy sequence: upper case intrinsic ('ZXZ'), lower case "
-                               "extrinsic"),
-    Key("angles", "quantity", unit="rad", shape=((), (1,), (2,), (3,)),
-        doc="the Euler angles, one per axis of `euler`"),
-), exactly_one=(("quaternion_scalar_last", "quaternion_scalar_first", "euler"),),
-    needs=(("euler", ("angles",)), ("angles", ("euler",))),
-    doc="body -> inertial; default identity")
+#: scenario's form, declared once in the model layer).
+ROTATION = ATTITUDE_TABLE
 
 
 def _body_table(name: str) -> Table:
@@ -513,19 +505,7 @@ def _body(path, table: dict, name: str) -> RigidBody:
 
 
 def _rotation(path, table: dict, key: str) -> Rotation:
-    if "euler" in table:
-        try:
-            return Rotation.from_euler(table["euler"], table["angles"])
-        except (ValueError, TypeError) as err:
-            raise _fail(path, f"{key}.euler", f"{err}; write a scipy sequence such as "
-                                              "'ZXZ' with one angle per axis") from None
-    form = next(k for k in ("quaternion_scalar_last", "quaternion_scalar_first") if k in table)
-    q = np.asarray(table[form], dtype=float)
-    if abs(np.linalg.norm(q) - 1) > 1e-6:
-        raise _fail(path, f"{key}.{form}", f"quaternion {q.tolist()} has norm "
-                                           f"{np.linalg.norm(q):.9g}, not 1; normalise it "
-                                           "and check the component order")
-    return Rotation.from_quat(q, scalar_first=(form == "quaternion_scalar_first"))
+    return rotation_from_table(table, key, lambda k, message: _fail(path, k, message))
 
 
 def _spin(path, table: dict, body: RigidBody, name: str) -> tuple[Rotation, np.ndarray]:

@@ -20,10 +20,12 @@ from scipy.spatial.transform import Rotation
 
 from ..foundations.errors import InvalidStateError
 from ..foundations.quantities import DEFAULT_TIME_SCALE, to_si, to_time  # the one default
+from ..foundations.spec import Key, Table
 from .body import RigidBody
 
 __all__ = ["AttitudeState", "INERTIAL_FRAMES", "DEFAULT_TIME_SCALE", "QUATERNION_NORM_TOL",
-           "direction_frame", "spin_axis_quaternion", "stack_states", "format_epoch"]
+           "direction_frame", "spin_axis_quaternion", "stack_states", "format_epoch",
+           "ATTITUDE_TABLE", "rotation_from_table"]
 
 #: Inertial frame labels accepted (case-insensitive).  No frame conversion is ever done:
 #: the label travels with the data.  ``INERTIAL`` is a generic label for synthetic studies.
@@ -372,3 +374,51 @@ def stack_states(states, n: int | None = None
     quaternion = np.stack([s.attitude.as_quat() for s in states])     # body -> inertial
     omega = np.array([s.omega_body for s in states], dtype=float)
     return epoch, frame, quaternion, omega
+
+
+#: An attitude (body -> inertial) in a scenario file: a quaternion or Euler angles.  The
+#: one declaration of the single-body scenario's (``[state] attitude``, a part's
+#: ``orientation``) and the binary's (each body's ``attitude``).
+ATTITUDE_TABLE = Table("rotation", (
+    Key("quaternion_scalar_last", "quantity", unit="", shape=(4,), doc="x, y, z, w"),
+    Key("quaternion_scalar_first", "quantity", unit="", shape=(4,), doc="w, x, y, z"),
+    Key("euler", "string", doc="scipy sequence: upper case intrinsic ('ZXZ'), lower case "
+                               "extrinsic"),
+    Key("angles", "quantity", unit="rad", shape=((), (1,), (2,), (3,)),
+        doc="the Euler angles, one per axis of `euler`"),
+), exactly_one=(("quaternion_scalar_last", "quaternion_scalar_first", "euler"),),
+    needs=(("euler", ("angles",)), ("angles", ("euler",))),
+    doc="body -> inertial: one of quaternion_scalar_last, quaternion_scalar_first, or euler "
+        "with angles")
+
+
+def rotation_from_table(table: Mapping, key: str, fail) -> Rotation:
+    """The scipy Rotation of a validated :data:`ATTITUDE_TABLE` table (``key`` its place
+    in the file); ``fail(key, message)`` returns the error to raise: for Euler angles
+    scipy refuses, or a quaternion whose norm is not 1 within
+    :data:`QUATERNION_NORM_TOL`.
+
+    Examples
+    --------
+    >>> r = rotation_from_table({"euler": "z", "angles": 0.5}, "state.attitude", None)
+    >>> float(r.magnitude())
+    0.5
+    >>> rotation_from_table({"quaternion_scalar_first": [2.0, 0.0, 0.0, 0.0]}, "q",
+    ...                     lambda k, m: ValueError(f"{k}: {m}"))
+    Traceback (most recent call last):
+    ...
+    ValueError: q.quaternion_scalar_first: quaternion [2.0, 0.0, 0.0, 0.0] has norm 2, ...
+    """
+    if "euler" in table:
+        try:
+            return Rotation.from_euler(table["euler"], table["angles"])
+        except (ValueError, TypeError) as exc:
+            raise fail(f"{key}.euler", f"{exc}; write a scipy sequence such as 'ZXZ' "
+                                       "with one angle per axis") from None
+    form = next(k for k in ("quaternion_scalar_last", "quaternion_scalar_first") if k in table)
+    q = np.asarray(table[form], dtype=float)
+    norm = np.linalg.norm(q)
+    if abs(norm - 1) > QUATERNION_NORM_TOL:
+        raise fail(f"{key}.{form}", f"quaternion {q.tolist()} has norm {norm:.9g}, not 1; "
+                                    "normalise it and check the component order")
+    return Rotation.from_quat(q, scalar_first=(form == "quaternion_scalar_first"))
