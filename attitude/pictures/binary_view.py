@@ -20,25 +20,9 @@ from ..binary.propagate import is_binary_dataset
 from ..foundations import quaternion as quat
 from ..foundations.errors import EphemerisFormatError
 from .page import MAX_LINE_POINTS, animation_controls, float32, mesh_faces, plotly_modules, thinned
-from .poinsot import ellipsoid_surface, surface_quads
+from .poinsot import ellipsoid_surface, solid_semi_axes, surface_quads
 
-__all__ = ["binary_view", "solid_semi_axes"]
-
-
-def solid_semi_axes(moments, mass: float) -> np.ndarray:
-    """Semi-axes (m) of the uniform solid ellipsoid of principal moments ``A <= B <= C``
-    (kg m^2) and ``mass`` (kg): ``a^2 = 5 (B + C - A) / (2 m)``, ...
-
-    Examples
-    --------
-    >>> m, a, b, c = 10.0, 3.0, 2.0, 1.0
-    >>> moments = [m * (b**2 + c**2) / 5, m * (a**2 + c**2) / 5, m * (a**2 + b**2) / 5]
-    >>> solid_semi_axes(moments, m).round(12).tolist()
-    [3.0, 2.0, 1.0]
-    """
-    A, B, C = np.asarray(moments, dtype=float)
-    squares = 2.5 / mass * np.array([B + C - A, A + C - B, A + B - C])
-    return np.sqrt(np.maximum(squares, 0.0))
+__all__ = ["binary_view"]
 
 
 def binary_view(eph, *, max_frames: int = 150):

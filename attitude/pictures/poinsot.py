@@ -24,7 +24,8 @@ import numpy as np
 
 from ..foundations import quaternion as quat
 
-__all__ = ["energy_ellipsoid_surface", "equivalent_ellipsoid_axes", "ellipsoid_surface",
+__all__ = ["energy_ellipsoid_surface", "equivalent_ellipsoid_axes", "solid_semi_axes",
+           "ellipsoid_surface",
            "energy_residual", "momentum_residual", "on_polhode", "herpolhode_point",
            "invariable_plane", "plane_patch", "body_axes", "surface_quads"]
 
@@ -84,10 +85,26 @@ def energy_ellipsoid_surface(inertia, energy, *, n_lat: int = 12, n_lon: int = 2
     return ellipsoid_surface(np.sqrt(2.0 * energy / moments), axes, n_lat=n_lat, n_lon=n_lon)
 
 
+def solid_semi_axes(moments, mass: float) -> np.ndarray:
+    """Semi-axes (m) of the uniform solid ellipsoid of principal moments ``A <= B <= C``
+    (kg m^2) and ``mass`` (kg): ``a^2 = 5 (B + C - A) / (2 m)``, ...
+
+    Examples
+    --------
+    >>> m, a, b, c = 10.0, 3.0, 2.0, 1.0
+    >>> moments = [m * (b**2 + c**2) / 5, m * (a**2 + c**2) / 5, m * (a**2 + b**2) / 5]
+    >>> solid_semi_axes(moments, m).round(12).tolist()
+    [3.0, 2.0, 1.0]
+    """
+    A, B, C = np.asarray(moments, dtype=float)
+    squares = 2.5 / mass * np.array([B + C - A, A + C - B, A + B - C])
+    return np.sqrt(np.maximum(squares, 0.0))
+
+
 def equivalent_ellipsoid_axes(moments) -> np.ndarray:
     """Semi-axes of the uniform solid ellipsoid with the principal moments ``moments``
-    (``A = m (b^2 + c^2) / 5``, ...), scaled so that the largest is 1: the shape drawn for
-    a body known only by its inertia.
+    (:func:`solid_semi_axes`), scaled so that the largest is 1: the shape drawn for a
+    body known only by its inertia.
 
     Examples
     --------
@@ -96,9 +113,7 @@ def equivalent_ellipsoid_axes(moments) -> np.ndarray:
     >>> equivalent_ellipsoid_axes([(4 + 9), (1 + 9), (1 + 4)]).round(12).tolist()
     [0.333333333333, 0.666666666667, 1.0]
     """
-    A, B, C = np.asarray(moments, dtype=float)
-    squares = np.maximum(np.array([B + C - A, A + C - B, A + B - C]), 0.0)
-    axes = np.sqrt(squares)
+    axes = solid_semi_axes(moments, 1.0)
     return axes / axes.max()
 
 

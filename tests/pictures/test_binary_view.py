@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 
 import attitude as att  # noqa: E402
 from attitude.binary.diagnostics import libration_angle  # noqa: E402
-from attitude.pictures.binary_view import solid_semi_axes  # noqa: E402
+from attitude.pictures.poinsot import solid_semi_axes  # noqa: E402
 from attitude.pictures.viewer import view  # noqa: E402
 
 SEMI = np.array([103.16, 79.35, 66.13])
