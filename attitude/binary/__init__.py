@@ -5,7 +5,9 @@ mutual potential, force and torques), ``system`` (:class:`BinarySystem`,
 :class:`BinaryState`, :class:`Impulse`), ``dynamics`` (equations of motion, DOP853),
 ``propagate`` (the ephemeris of a binary), ``diagnostics`` (periods, libration, regime:
 :func:`diagnose`), ``chaos`` (the finite-time Lyapunov exponent), ``ensembles`` (many
-systems in one call, in this process or on dask: :func:`ensemble`, :func:`sample_dart`).
+systems in one call, in this process or on dask: :func:`ensemble`, :func:`sample_dart`),
+``encounter`` (a planet's flyby of a tumbling body and its ensemble:
+:func:`close_encounter`, :func:`sample_encounter`, :func:`encounter_ensemble`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,12 @@ from attitude.binary.diagnostics import (
     libration_angle,
     period_change,
 )
+from attitude.binary.encounter import (
+    close_encounter,
+    encounter_ensemble,
+    hyperbola,
+    sample_encounter,
+)
 from attitude.binary.ensembles import ensemble, sample_dart
 from attitude.binary.integrals import InertiaIntegrals, inertia_integrals, multi_indices, rotated
 from attitude.binary.mutual import MutualForces, MutualGravity
@@ -29,4 +37,5 @@ __all__ = ["InertiaIntegrals", "inertia_integrals", "multi_indices", "rotated", 
            "MutualGravity", "BinarySystem", "BinaryState", "Impulse", "BODIES",
            "propagate_binary", "G", "BinaryDiagnosis", "PeriodChange", "diagnose",
            "libration_angle", "period_change", "BinaryLyapunov", "lyapunov_exponent",
-           "ensemble", "sample_dart"]
+           "ensemble", "sample_dart", "hyperbola", "close_encounter", "sample_encounter",
+           "encounter_ensemble"]
