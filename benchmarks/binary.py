@@ -29,6 +29,8 @@ The issue's longer figures, each kept in the same results file:
     python benchmarks/binary.py --only --long 10000     # the LGVI over 1e4 orbits
     python benchmarks/binary.py --only --variants 1000 --workers 2
                                                         # post-impact Dimorphos variants
+    python benchmarks/binary.py --only --flyby 100      # Apophis 2029 as an ensemble
+    python benchmarks/binary.py --only --shapes         # does Dimorphos tumble, by a/b
 
 Writes ``benchmarks/results/binary.json`` atomically.
 """
@@ -298,6 +300,105 @@ def variants_run(count: int = 1000, days: float = 30.0, step: float = 60.0,
     return out
 
 
+def flyby_run(count: int = 100, seed: int = 1, step: float = 300.0,
+              check: int = 4) -> dict:
+    """Apophis past the Earth in 2029 as an ensemble (att.binary.sample_encounter: Pravec
+    et al. 2014's state and uncertainties, both phases uniform), from 12 h before perigee
+    to 12 h after, with the LGVI at ``step`` s; the first ``check`` members again with
+    DOP853 at rtol 1e-10, whose largest difference in the period changes bounds the
+    LGVI's error.  The quantiles of the changes of E/E0, P_phi and P_psi and of
+    ``|dH|/|H|``, the regime fractions after, and the share of members whose P_phi
+    changes by more than its published 3-sigma uncertainty (0.07 h)."""
+    members = att.binary.sample_encounter(count, rng=seed)
+    times = np.array([0.0, 86400.0])
+    t0 = time.perf_counter()
+    ds = att.binary.encounter_ensemble(members, times, method="lgvi", rtol=None, step=step)
+    wall = time.perf_counter() - t0
+    ref = att.binary.encounter_ensemble(members[:check], times, rtol=1e-10)
+    ok = ds.status.values == 0
+
+    def quantiles(values, scale=1.0):
+        q = np.percentile(np.asarray(values)[ok] / scale, [5, 50, 95])
+        return {"p05": float(q[0]), "p50": float(q[1]), "p95": float(q[2])}
+
+    dphi = ds.precession_change.values
+    return {"members": count, "seed": seed, "step_s": step, "wall_s": wall,
+            "ran": int(ok.sum()),
+            "regime_fractions_before": ds.attrs["regime_fractions_before"],
+            "regime_fractions_after": ds.attrs["regime_fractions"],
+            "energy_ratio_change": quantiles(ds.energy_ratio_change.values),
+            "precession_change_h": quantiles(dphi, 3600.0),
+            "rotation_change_h": quantiles(ds.rotation_change.values, 3600.0),
+            "spin_momentum_change": quantiles(ds.spin_momentum_change.values),
+            "abs_precession_change_h_max": float(np.abs(dphi[ok]).max() / 3600.0),
+            "share_precession_change_above_0.07h": float(np.mean(np.abs(dphi[ok]) > 252.0)),
+            "max_angular_momentum_drift": float(ds.angular_momentum_drift.values[ok].max()),
+            "lgvi_minus_dop853_precession_change_h": float(np.abs(
+                dphi[:check] - ref.precession_change.values).max() / 3600.0)}
+
+
+#: Dimorphos's shape family for --shapes: the volume and b/c (84.5/57.5, the pre-impact
+#: model's) kept, a/b swept.
+SHAPE_VOLUME, SHAPE_BC = 89.5 * 84.5 * 57.5, 84.5 / 57.5
+
+
+def shape_members(elongation: float, betas, impact_time: float):
+    """DART members with Dimorphos of long-to-intermediate ratio ``elongation``:
+    att.binary.sample_dart's system and impact (circular at 1190 m in the mutual force,
+    Dimorphos locked, 580 kg at the scenario's velocity) with its axes replaced, the
+    impact at the same ``impact_time`` for every member (so that they run as one family)."""
+    from attitude.binary.dynamics import mutual_forces
+    from attitude.binary.ensembles import DART
+    from attitude.binary.system import impact_delta_v
+
+    c = (SHAPE_VOLUME / (elongation * SHAPE_BC**2)) ** (1 / 3)
+    axes = [elongation * SHAPE_BC * c, SHAPE_BC * c, c]
+    primary = att.RigidBody.from_mass_properties(ELLIPSOID(5.282e11, DART["primary_axes"]))
+    system = att.BinarySystem(primary, att.RigidBody.from_mass_properties(
+        ELLIPSOID(DART["secondary_mass"], axes)))
+    r = DART["separation"]
+    force = mutual_forces(system, np.array([r, 0.0, 0.0]), np.eye(3), np.eye(3)).force
+    speed = np.sqrt(-float(force[0]) * r / system.reduced_mass)
+    rate = speed / r
+    state = att.BinaryState("2022-09-26", [r, 0.0, 0.0], [0.0, speed, 0.0],
+                            Rotation.identity(), [0, 0, 2 * np.pi / DART["primary_spin_period"]],
+                            Rotation.identity(), [0.0, 0.0, rate])
+    U = Rotation.from_rotvec([0.0, 0.0, rate * impact_time]).apply(DART["impactor_velocity"])
+    return [(system, state, [att.Impulse(impact_time, body="secondary",
+                                         delta_v=impact_delta_v(DART["impactor_mass"], U, b,
+                                                                DART["secondary_mass"]))],
+             {"elongation": elongation, "beta": float(b)}) for b in betas]
+
+
+def shapes_run(elongations=(1.05, 1.1, 1.2, 1.3, 1.4, 1.5), per_shape: int = 3,
+               days: float = 30.0, step: float = 120.0, seed: int = 1) -> dict:
+    """Whether Dimorphos tumbles after DART, shape by shape: ``per_shape`` members each
+    (beta 3.61 +- 0.2) over ``days`` after the impact (1.5 orbits in), sampled every 10
+    min, the LGVI at ``step`` s, order 2, each member's regime by att.binary.ensemble
+    (att.binary.diagnose after the impact).  Beside each shape: its planar libration
+    frequency ``omega_0 / n = sqrt(3 (B - A) / C)`` (the lock's strength)."""
+    rng = np.random.default_rng(seed)
+    betas = rng.normal(3.61, 0.2, size=per_shape)
+    impact = 1.5 * 11.92 * 3600.0
+    members = [m for e in elongations for m in shape_members(e, betas, impact)]
+    times = np.arange(0.0, impact + days * DAY + 1.0, 600.0)
+    t0 = time.perf_counter()
+    ds = att.binary.ensemble(members, times, step=step)
+    wall = time.perf_counter() - t0
+    rows = []
+    for e in elongations:
+        sel = np.isclose(ds.elongation.values, e) & (ds.status.values == 0)
+        A, B, C = shape_members(e, [3.61], impact)[0][0].secondary.principal_moments
+        regimes = list(ds.secondary_regime.values[sel])
+        amp = ds.libration_amplitude.values[sel]
+        rows.append({"elongation": e, "omega0_over_n": float(np.sqrt(3 * (B - A) / C)),
+                     "members": int(sel.sum()),
+                     "regimes": {r: regimes.count(r) / len(regimes) for r in sorted(set(regimes))},
+                     "libration_amplitude_deg": [float(np.degrees(a)) for a in amp]})
+    return {"days": days, "step_s": step, "per_shape": per_shape, "wall_s": wall,
+            "betas": [float(b) for b in betas], "shapes": rows}
+
+
 def report(name: str, run: dict) -> None:
     setting = f"step {run['step']:g} s" if "step" in run else f"rtol {run['rtol']:g}"
     print(f"  {name:8s} {setting:14s} CPU {run['cpu_s']:6.2f} s   max |dE/E| "
@@ -325,6 +426,10 @@ def main(argv=None) -> None:
                     help="N post-impact Dimorphos variants over a month, all at once")
     ap.add_argument("--workers", type=int, default=0, metavar="W",
                     help="with --variants: also on a dask LocalCluster of W workers")
+    ap.add_argument("--flyby", type=int, default=0, metavar="N",
+                    help="N Apophis flybys of 2029 over the uncertainty of its state")
+    ap.add_argument("--shapes", action="store_true",
+                    help="Dimorphos's regime a month after DART, shape by shape (a/b)")
     ap.add_argument("--only", action="store_true",
                     help="run only the parts asked (--kepler, --long, --variants), not "
                          "the Didymos-like day; keep the other results in the file")
@@ -348,6 +453,24 @@ def main(argv=None) -> None:
                   f"{v['wall_s']:.0f} s; regimes {v['regime_fractions']}"
                   + (f"; {v['workers']} dask workers {v['parallel_wall_s']:.0f} s, scaling "
                      f"{100 * v['scaling']:.0f} %" if "scaling" in v else ""))
+        if args.flyby:
+            f = result["apophis_flyby"] = flyby_run(args.flyby)
+            print(f"Apophis 2029, {f['ran']} of {f['members']} members ({f['wall_s']:.0f} s): "
+                  f"regimes after {f['regime_fractions_after']}; dP_phi (5, 50, 95 %) "
+                  + ", ".join(f"{v:+.2f}" for v in f["precession_change_h"].values())
+                  + " h; dP_psi " + ", ".join(f"{v:+.1f}" for v in f["rotation_change_h"].values())
+                  + " h; d(E/E0) "
+                  + ", ".join(f"{v:+.4f}" for v in f["energy_ratio_change"].values())
+                  + f"; |dP_phi| > 0.07 h in {100 * f['share_precession_change_above_0.07h']:.0f} %"
+                  f"; LGVI - DOP853 {f['lgvi_minus_dop853_precession_change_h']:.1e} h")
+        if args.shapes:
+            s = result["dimorphos_shapes"] = shapes_run()
+            print(f"Dimorphos after DART, {s['days']:g} days, {s['per_shape']} members a shape "
+                  f"({s['wall_s']:.0f} s):")
+            for row in s["shapes"]:
+                amp = ", ".join(f"{a:.0f}" for a in row["libration_amplitude_deg"])
+                print(f"  a/b {row['elongation']:.2f}  omega0/n {row['omega0_over_n']:.2f}  "
+                      f"{row['regimes']}  libration amplitude {amp} deg")
         text = json.dumps(result, indent=1)
         path = write_atomically(args.out, lambda tmp: tmp.write_text(text))
         print(f"results: {path}")
