@@ -15,8 +15,11 @@ Each function takes an :class:`~attitude.model.ephemeris.Ephemeris` (one body) a
   excitation ``L^2 / (2 E B)`` over time, for perturbed runs.
 
 :func:`figures` builds them all and :func:`save_figures` writes them as PNG (what
-``attitude run --plot`` does).  matplotlib is imported lazily; without it these functions
-raise :class:`PlotUnavailableError`.  For example::
+``attitude run --plot`` does).  A binary's ephemeris (issue 28) gets
+:data:`BINARY_FIGURES` instead (:func:`binary_separation`, :func:`binary_libration`,
+:func:`binary_spins`), an ensemble of binaries :func:`binary_ensemble`.  matplotlib is
+imported lazily; without it these functions raise :class:`PlotUnavailableError`.  For
+example::
 
     import numpy as np, attitude as att
     from scipy.spatial.transform import Rotation
@@ -40,6 +43,8 @@ from ..analysis.diagnostics import (
     reference_axis_for,
 )
 from ..analysis.statistics import attitude_spread
+from ..binary.diagnostics import libration_angle
+from ..binary.propagate import is_binary_dataset
 from ..foundations.errors import AttitudeError
 from ..foundations.figures import agg_figure
 from ..foundations.quaternion import rotate
@@ -47,7 +52,8 @@ from ..model.freebody import diagnose_many
 
 __all__ = ["agg_figure", "polhode", "herpolhode", "body_axes", "euler_angles",
            "regime_timeline", "ensemble_regimes", "ensemble_spread", "figures",
-           "save_figures", "FIGURES", "ENSEMBLE_FIGURES"]
+           "save_figures", "FIGURES", "ENSEMBLE_FIGURES", "binary_separation",
+           "binary_libration", "binary_spins", "binary_ensemble", "BINARY_FIGURES"]
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")      # A (long), B, C (short)
 _REGIME_COLOURS = {"PA-short": "tab:blue", "PA-long": "tab:red", "SAM": "tab:cyan",
@@ -432,6 +438,153 @@ def _title(eph, what: str) -> str:
     return f"{what} - {name}" if name else what
 
 
+def binary_separation(eph):
+    """A binary's separation ``|R|`` (the secondary's centre from the primary's) against
+    time.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ellipsoid = att.MassProperties.solid_ellipsoid
+    >>> system = att.BinarySystem(
+    ...     att.RigidBody.from_mass_properties(ellipsoid(5.2e11, [400.0, 400.0, 400.0])),
+    ...     att.RigidBody.from_mass_properties(ellipsoid(4.3e9, [103.0, 79.0, 66.0])))
+    >>> n = np.sqrt(system.mu / 1190.0**3)
+    >>> state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+    ...                         Rotation.identity(), [0, 0, 2 * np.pi / 8136.0],
+    ...                         Rotation.from_euler("z", 5, degrees=True), [0, 0, n])
+    >>> eph = att.propagate(system, state, np.linspace(0.0, 4 * np.pi / n, 200))
+    >>> from attitude.app.plot import binary_separation
+    >>> fig = binary_separation(eph)
+    >>> fig.axes[0].get_ylabel()
+    'separation (m)'
+    """
+    ds = eph.dataset
+    r = np.linalg.norm(np.asarray(ds["relative_position"].values, dtype=float), axis=-1)
+    t, unit = _time_axis(np.asarray(ds["time"].values, dtype=float))
+    fig = agg_figure(figsize=(10, 3.6), layout="constrained")
+    ax = fig.subplots()
+    ax.plot(t, r, color="tab:blue", linewidth=0.9)
+    ax.set_xlabel(f"time ({unit})")
+    ax.set_ylabel("separation (m)")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(_title(eph, "Mutual orbit"))
+    return fig
+
+
+def binary_libration(eph):
+    """The secondary's libration angle (its long axis from the direction to the primary,
+    in the orbit plane, :func:`attitude.binary.libration_angle`) against time, deg.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ellipsoid = att.MassProperties.solid_ellipsoid
+    >>> system = att.BinarySystem(
+    ...     att.RigidBody.from_mass_properties(ellipsoid(5.2e11, [400.0, 400.0, 400.0])),
+    ...     att.RigidBody.from_mass_properties(ellipsoid(4.3e9, [103.0, 79.0, 66.0])))
+    >>> n = np.sqrt(system.mu / 1190.0**3)
+    >>> state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+    ...                         Rotation.identity(), [0, 0, 2 * np.pi / 8136.0],
+    ...                         Rotation.from_euler("z", 5, degrees=True), [0, 0, n])
+    >>> eph = att.propagate(system, state, np.linspace(0.0, 4 * np.pi / n, 200))
+    >>> from attitude.app.plot import binary_libration
+    >>> fig = binary_libration(eph)
+    >>> [float(y) for y in fig.axes[0].get_ylim()]
+    [-90.0, 90.0]
+    """
+    angle = np.degrees(libration_angle(eph))
+    t, unit = _time_axis(np.asarray(eph.dataset["time"].values, dtype=float))
+    fig = agg_figure(figsize=(10, 3.6), layout="constrained")
+    ax = fig.subplots()
+    ax.plot(t, angle, ".", color="tab:red", markersize=2)
+    ax.set_xlabel(f"time ({unit})")
+    ax.set_ylabel("libration angle (deg)")
+    ax.set_ylim(-90.0, 90.0)
+    ax.grid(True, alpha=0.3)
+    ax.set_title(_title(eph, "The secondary's libration"))
+    return fig
+
+
+def binary_spins(eph):
+    """Each body's spin: the body-frame angular velocity's components and its norm
+    against time, one panel a body (rad/s).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ellipsoid = att.MassProperties.solid_ellipsoid
+    >>> system = att.BinarySystem(
+    ...     att.RigidBody.from_mass_properties(ellipsoid(5.2e11, [400.0, 400.0, 400.0])),
+    ...     att.RigidBody.from_mass_properties(ellipsoid(4.3e9, [103.0, 79.0, 66.0])))
+    >>> n = np.sqrt(system.mu / 1190.0**3)
+    >>> state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+    ...                         Rotation.identity(), [0, 0, 2 * np.pi / 8136.0],
+    ...                         Rotation.from_euler("z", 5, degrees=True), [0, 0, n])
+    >>> eph = att.propagate(system, state, np.linspace(0.0, 4 * np.pi / n, 200))
+    >>> from attitude.app.plot import binary_spins
+    >>> fig = binary_spins(eph)
+    >>> [a.get_title() for a in fig.axes]
+    ['primary', 'secondary']
+    """
+    ds = eph.dataset
+    w = np.asarray(ds["angular_velocity"].values, dtype=float)          # (body, time, 3)
+    t, unit = _time_axis(np.asarray(ds["time"].values, dtype=float))
+    fig = agg_figure(figsize=(10, 5.5), layout="constrained")
+    axes = fig.subplots(2, 1, sharex=True)
+    for k, (ax, name) in enumerate(zip(axes, ("primary", "secondary"))):
+        for i, colour in enumerate(_AXIS_COLOURS):
+            ax.plot(t, w[k, :, i], color=colour, linewidth=0.9, label="xyz"[i])
+        ax.plot(t, np.linalg.norm(w[k], axis=-1), color="black", linewidth=1.1,
+                label="|omega|")
+        ax.set_ylabel("omega (rad/s, body frame)")
+        ax.set_title(name)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize="small", ncol=4)
+    axes[-1].set_xlabel(f"time ({unit})")
+    return fig
+
+
+def binary_ensemble(ds):
+    """An ensemble of binaries (:func:`attitude.binary.ensemble`'s Dataset) at a glance:
+    the secondary's regime fractions and, when measured, the distribution of the period
+    change across the first impulse (min).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> from attitude.app.plot import binary_ensemble
+    >>> ds = xr.Dataset({"status": ("member", [0, 0, 1]),
+    ...                  "period_change": ("member", [-2000.0, -1990.0, np.nan])},
+    ...                 attrs={"regime_fractions": {"librating": 1.0}})
+    >>> len(binary_ensemble(ds).axes)
+    2
+    """
+    fractions = dict(ds.attrs.get("regime_fractions", {}))
+    fig = agg_figure(figsize=(10, 4.0), layout="constrained")
+    left, right = fig.subplots(1, 2, width_ratios=(1, 1.6))
+    left.bar(list(fractions), list(fractions.values()), color="tab:cyan")
+    left.set_ylim(0, 1)
+    left.set_ylabel("fraction of the members that ran")
+    ok = np.asarray(ds["status"].values) == 0
+    left.set_title(f"secondary's regime ({int(ok.sum())} of {ok.size} ran)")
+    change = (np.asarray(ds["period_change"].values, dtype=float)[ok] / 60.0
+              if "period_change" in ds else np.array([]))
+    change = change[np.isfinite(change)]
+    if change.size:
+        right.hist(change, bins=max(5, min(40, change.size // 3)), color="tab:gray")
+    right.set_xlabel("period change across the impulse (min)")
+    right.set_ylabel("members")
+    fig.suptitle(ds.attrs.get("title", "Ensemble of binaries"))
+    return fig
+
+
+#: A binary's figures (``attitude run --plot`` on a ``[binary]`` scenario).
+BINARY_FIGURES = {"separation": binary_separation, "libration": binary_libration,
+                  "spins": binary_spins}
 #: Figure name -> function, in the order :func:`figures` builds them.
 FIGURES = {"polhode": polhode, "herpolhode": herpolhode, "body_axes": body_axes,
            "euler_angles": euler_angles, "regime": regime_timeline}
@@ -444,7 +597,7 @@ def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
     """Every figure of :data:`FIGURES` for ``eph``: ``{name: Figure}``.  The regime
     timeline is included when ``regime`` is true, or by default when a
     ``classification`` is given (perturbed runs).  A batch (ensemble) ephemeris gets
-    :data:`ENSEMBLE_FIGURES` instead.
+    :data:`ENSEMBLE_FIGURES` instead, a binary's :data:`BINARY_FIGURES`.
 
     Examples
     --------
@@ -457,6 +610,8 @@ def figures(eph, classification=None, *, regime: bool | None = None) -> dict:
     >>> sorted(figures(eph))
     ['body_axes', 'euler_angles', 'herpolhode', 'polhode']
     """
+    if is_binary_dataset(eph.dataset):
+        return {name: func(eph) for name, func in BINARY_FIGURES.items()}
     if eph.is_batch:
         nominal = eph.dataset.attrs.get("nominal_body")
         out = {"regimes": ensemble_regimes(eph)}

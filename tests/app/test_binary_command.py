@@ -230,3 +230,73 @@ def test_the_lgvi_keeps_the_angular_momentum(scenario, capsys):
     data = json.loads(report.read_text())
     assert data["method"] == "lgvi"
     assert data["conservation"]["angular_momentum_rel_drift"] < 1e-12
+
+
+# --plot and --workers on binary scenarios -----------------------------------------------
+
+def test_plot_writes_the_binary_figures_next_to_the_output(scenario, capsys):
+    """``--plot``: the separation, the libration angle and both spins, as PNG files named
+    after the netCDF output (as ``attitude run --plot`` names a single body's), listed
+    under Wrote."""
+    pytest.importorskip("matplotlib")
+    out = scenario.parent / "pair.nc"
+    assert main(["run", str(scenario), "-o", str(out), "--plot"]) == 0
+    text = capsys.readouterr().out
+    for name in ("separation", "libration", "spins"):
+        path = scenario.parent / f"pair_{name}.png"
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"      # a PNG file
+        assert f"Wrote      {path}" in text
+
+
+def _ensemble_file(tmp_path, n: int = 2):
+    from tests.binary.test_ensemble import SCENARIO
+    path = tmp_path / "family.toml"
+    path.write_text(SCENARIO.replace("n = 4", f"n = {n}"))
+    return path
+
+
+def test_plot_of_a_binary_ensemble(tmp_path, capsys):
+    """A ``[binary.ensemble]``: one figure of its outcomes (the regime fractions and the
+    period changes)."""
+    pytest.importorskip("matplotlib")
+    path = _ensemble_file(tmp_path)
+    assert main(["run", str(path), "--plot"]) == 0
+    figure = tmp_path / "family_outcomes.png"
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"Wrote      {figure}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--workers", "2"], "--workers: the scenario has no [binary.ensemble] table"),
+    (["--workers", "0"], "--workers: must be at least 1"),
+])
+def test_workers_needs_an_ensemble(scenario, capsys, argv, message):
+    assert main(["run", str(scenario), *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.slow      # a dask LocalCluster of two processes (> 9 s); CI's slow tier
+def test_workers_runs_the_binary_ensemble_on_a_local_cluster(tmp_path):
+    """``--workers 2``: the members' chunks on two worker processes, the same outcomes
+    as in this process (each member runs the same steps wherever it runs: the family's
+    vectorised steps are each member's own, so to round-off of a few operations)."""
+    pytest.importorskip("distributed")
+    import subprocess
+    import sys
+
+    from attitude.binary.config import load_binary, run_binary
+
+    path = _ensemble_file(tmp_path, n=4)
+    report = tmp_path / "r.json"
+    out = subprocess.run([sys.executable, "-m", "attitude", "run", str(path), "--workers",
+                          "2", "--report", str(report), "--quiet"], capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert out.stderr == ""
+    there = json.loads(report.read_text())
+    here = run_binary(load_binary(path), write_outputs=False).report()
+    assert there["status"] == here["status"] == {"ok": 4, "invalid_input": 0, "failed": 0}
+    assert there["regime_fractions"] == here["regime_fractions"]
+    for key, value in here["period_change_quantiles"].items():
+        assert there["period_change_quantiles"][key] == pytest.approx(value, rel=1e-9)

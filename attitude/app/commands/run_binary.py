@@ -1,16 +1,22 @@
 """``attitude run`` on a binary scenario (``[binary]``, issue 28): propagate both bodies,
 print the orbit, the libration, the regime and the conservation, write the ephemeris and
-the report."""
+the report; ``--plot`` writes the binary's figures (separation, libration, spins; an
+ensemble's outcomes) next to the output, ``--workers N`` runs a ``[binary.ensemble]`` on
+a dask LocalCluster of N workers."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import logging
 import math
 import sys
 from pathlib import Path
 
 from ...binary.config import load_binary, run_binary
 from ...model.ephemeris import write_atomically
+from ...propagation.cluster import local_cluster
+from ..plot import binary_ensemble, save_figures
 from .common import EXIT_EXPECTATION, EXIT_INPUT, EXIT_OK, expectation_line, format_seconds
 
 #: Nothing public: ``attitude run`` hands a binary scenario to :func:`run_binary_command`.
@@ -74,16 +80,53 @@ def summary_rows(run, scenario) -> list[tuple[str, str]]:
     return rows
 
 
+def _plot(run, scenario, output) -> list[Path]:
+    """``--plot``: the figures next to the netCDF output, else next to the scenario, as
+    ``<stem>_<name>.png``."""
+    stem = Path(output if output else scenario.path).with_suffix("")
+    if run.ensemble is None:
+        return save_figures(run.ephemeris, stem)
+    path = stem.with_name(f"{stem.name}_outcomes.png")
+    binary_ensemble(run.ensemble).savefig(path, dpi=100)
+    return [path]
+
+
+def _run_on_workers(scenario, workers: int, output):
+    """A ``[binary.ensemble]`` on a dask LocalCluster of ``workers`` processes (the
+    members' chunks as tasks); distributed's log below errors kept off stderr (its
+    nanny's notices when the cluster closes are no news: the results are in)."""
+    logger = logging.getLogger("distributed")
+    level = None
+    try:
+        with local_cluster(workers) as client:
+            level = logger.level                 # after distributed set its own
+            logger.setLevel(logging.ERROR)
+            spec = {**scenario.ensemble, "client": client}
+            return run_binary(dataclasses.replace(scenario, ensemble=spec), output=output)
+    finally:
+        if level is not None:
+            logger.setLevel(level)
+
+
 def run_binary_command(args) -> int:
-    """``attitude run X.toml`` for a binary scenario: summary, ``-o``, ``--report``."""
-    for flag, given in (("--workers", getattr(args, "workers", None) is not None),
-                        ("--plot", getattr(args, "plot", False))):
-        if given:
-            print(f"attitude: error: {args.scenario}: {flag}: not available for a binary "
-                  "scenario", file=sys.stderr)
-            return EXIT_INPUT
+    """``attitude run X.toml`` for a binary scenario: summary, ``-o``, ``--report``,
+    ``--plot``, ``--workers``."""
+    workers = getattr(args, "workers", None)
+    if workers is not None and workers < 1:
+        print("attitude: error: --workers: must be at least 1", file=sys.stderr)
+        return EXIT_INPUT
     scenario = load_binary(args.scenario)
-    run = run_binary(scenario, output=args.output)
+    if workers is not None and scenario.ensemble is None:
+        print(f"attitude: error: {args.scenario}: --workers: the scenario has no "
+              "[binary.ensemble] table (a single binary runs in one process)",
+              file=sys.stderr)
+        return EXIT_INPUT
+    if workers is not None:
+        run = _run_on_workers(scenario, workers, args.output)
+    else:
+        run = run_binary(scenario, output=args.output)
+    if getattr(args, "plot", False):
+        run.outputs.extend(_plot(run, scenario, args.output))
     if args.report:
         text = json.dumps(run.report(), indent=2, default=float)
         write_atomically(Path(args.report), lambda tmp: Path(tmp).write_text(text + "\n"))
