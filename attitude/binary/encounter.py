@@ -394,8 +394,8 @@ def _run_chunk(members, times, run) -> list:
     return [_run_member(m, times, run) for m in members]
 
 
-def encounter_ensemble(members, times, *, method: str | None = "integrator",
-                       rtol: float | None = 1e-10, step=None, client=None,
+def encounter_ensemble(members, times, *, method: str | None = None,
+                       rtol: float | None = None, step=None, client=None,
                        chunk_size: int | None = None) -> xr.Dataset:
     """Run close encounters and gather the body's Pravec parameters before and after.
 
@@ -408,7 +408,8 @@ def encounter_ensemble(members, times, *, method: str | None = "integrator",
         s since each state's epoch; the first and last samples are "before" and "after"
         (from ``before`` perigee to as long after, the tide beyond is a percent of it).
     method, rtol, step :
-        Of :func:`attitude.propagate` for a binary (default DOP853 at ``rtol`` 1e-10).
+        Of :func:`attitude.propagate` for a binary; given none of them, DOP853 at
+        ``rtol`` 1e-10 (a ``step`` alone: the LGVI at that step, s).
     client : None, "local", a dask ``Client`` or a scheduler address
         None: in this process; otherwise one dask task per chunk of ``chunk_size``
         members (default: two chunks per worker).
@@ -439,6 +440,8 @@ def encounter_ensemble(members, times, *, method: str | None = "integrator",
     """
     members = list(members)
     times = np.asarray(times, dtype=float)
+    if method is None and step is None:
+        method, rtol = "integrator", 1e-10 if rtol is None else rtol
     run = {"method": method, "rtol": rtol, "step": step}
     if client is None:
         rows = _run_chunk(members, times, run)
