@@ -27,7 +27,7 @@ from attitude.foundations.quantities import to_si
 from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex
 from attitude.inversion.gaussian_image import GaussianImage
 from attitude.inversion.minkowski import polyhedron_from_areas
-from attitude.inversion.observations import ObservedLightcurve
+from attitude.inversion.observations import ObservedLightcurve, engine_blocks
 from attitude.inversion.tumbler import (
     EXAMPLE_SHAPE,
     EXAMPLE_STATE,
@@ -116,7 +116,8 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
 
     Parameters
     ----------
-    observations : list of ObservedLightcurve
+    observations : LightcurveObservations or list of them
+        As for :func:`invert`.
     periods : array or Quantity
         Trial periods (s), spaced finely enough (:func:`period_grid`).
     poles : int
@@ -140,7 +141,7 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
     ((2,), True)
     """
     periods = np.atleast_1d(to_si(periods, "s", name="periods", error=PhotometryError))
-    model = ConvexModel(list(observations), GaussianImage(rows, degree))
+    model = ConvexModel(engine_blocks(observations), GaussianImage(rows, degree))
     chi2 = np.empty(periods.size)
     ended = np.empty(periods.size)
     for i, p in enumerate(periods):
@@ -219,8 +220,10 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
 
     Parameters
     ----------
-    observations : list of ObservedLightcurve
-        Lightcurves with their geometry (:func:`read_damit_lightcurves`).
+    observations : LightcurveObservations or list of them
+        Lightcurves with their geometry (:func:`read_damit_lightcurves`,
+        :func:`attitude.read_lightcurve` with ``geometry=``); each session of each is a
+        lightcurve of its own (a relative one: divided by its mean).
     rotation : {"auto", "principal", "tumbling"}
         The rotation fitted; ``"auto"`` is the principal-axis model; ``"tumbling"`` the
         non-principal-axis model of :mod:`attitude.inversion.tumbler`.
@@ -275,7 +278,7 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     if rotation not in ("auto", "principal", "tumbling"):
         raise PhotometryError(f"rotation {rotation!r} is unknown; use 'auto', 'principal' "
                               "or 'tumbling'", key="rotation")
-    observations = list(observations)
+    observations = engine_blocks(observations)
     if rotation == "tumbling":
         return _invert_tumbling(observations, start, period, rows=rows, degree=degree,
                                 convexity=convexity, max_iterations=max_iterations,
