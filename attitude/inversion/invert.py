@@ -255,7 +255,8 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     Raises
     ------
     PhotometryError
-        For an unknown rotation, a missing period, or too few points for the parameters.
+        For an unknown rotation, a missing period, fewer points than parameters (naming
+        the files), a single lightcurve shorter than the period asked (naming it).
 
     Examples
     --------
@@ -279,6 +280,9 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
         raise PhotometryError(f"rotation {rotation!r} is unknown; use 'auto', 'principal' "
                               "or 'tumbling'", key="rotation")
     observations = engine_blocks(observations)
+    _check_span(observations, period)
+    _check_enough_points(observations, GaussianImage(rows, degree).n_coefficients
+                         + (8 if rotation == "tumbling" else 3), rows, degree)
     if rotation == "tumbling":
         return _invert_tumbling(observations, start, period, rows=rows, degree=degree,
                                 convexity=convexity, max_iterations=max_iterations,
@@ -333,6 +337,38 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
                            chi2=best.chi2, rms=best.rms, regime="PA-short",
                            alternatives=alternatives, dark_facet=best.dark_facet,
                            spin_axis_tilt=tilt, fit=best)
+
+
+def _files(observations) -> str:
+    """The distinct files (or names) of the lightcurves, for messages."""
+    names = list(dict.fromkeys(o.name.split(": ")[0] for o in observations))
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+def _check_enough_points(observations, n_parameters: int, rows: int, degree: int) -> None:
+    """More points than parameters (the shape's coefficients and the rotation's), or a
+    :class:`PhotometryError` naming the files."""
+    n = sum(len(o) for o in observations)
+    if n <= n_parameters:
+        raise PhotometryError(
+            f"{_files(observations)}: {n} points for {n_parameters} parameters (a shape of "
+            f"rows {rows}, degree {degree}, and the rotation): give more lightcurves, or "
+            "a lower degree", key="observations")
+
+
+def _check_span(observations, period) -> None:
+    """A single lightcurve must cover the longest period asked for, else a
+    :class:`PhotometryError` naming it."""
+    if len(observations) != 1 or period is None:
+        return
+    p = np.atleast_1d(to_si(period, "s", name="period", error=PhotometryError))
+    [obs] = observations
+    span = float(np.ptp(obs.time))
+    if span < p.max():
+        raise PhotometryError(
+            f"{obs.name}: a single lightcurve of {span / 3600:.4g} h cannot give a period "
+            f"of {p.max() / 3600:.4g} h (less than one rotation is seen): give more "
+            "sessions, or a shorter period", key="period")
 
 
 def _pole_distance(a: ConvexFit, b: ConvexFit) -> float:
