@@ -104,6 +104,9 @@ INVERSION = Table("inversion", (
             "tumbling: the two fundamental periods, optional)"),
     Key("start", "table", table=START,
         doc="tumbling: the starting state (without it, the search from the data)"),
+    Key("start_from", "string",
+        doc="tumbling: a scenario file whose [body] and [state] start the fit (relative "
+            "to this file; the state at any epoch, ECLIPJ2000 or equatorial J2000)"),
     Key("alternatives", "boolean", default=True,
         doc="tumbling: also fit the other mode and the mirror L"),
     Key("poles", "integer", default=10, bounds=(1, None), doc="pole starts"),
@@ -237,8 +240,8 @@ class InversionRun:
         return all(check["ok"] for check in self.expect)
 
 
-def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bool = True
-                  ) -> InversionRun:
+def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bool = True,
+                  load_start=None) -> InversionRun:
     """Invert the scenario's lightcurves, check ``[expect]``, write the outputs.
 
     Parameters
@@ -249,6 +252,9 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
         Stem of the outputs (default: ``[inversion] output``, else the scenario's stem).
     write_outputs : bool
         False for a check that writes nothing.
+    load_start : callable, optional
+        ``path -> (RigidBody, AttitudeState)``: reads ``[inversion] start_from`` (the
+        application's scenario reader, which this wing cannot import).
 
     Examples
     --------
@@ -271,6 +277,16 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
     """
     cfg = scenario.inversion
     observations = read_observations(scenario)
+    start = cfg.get("start")
+    if "start_from" in cfg:
+        if "start" in cfg or cfg["rotation"] != "tumbling":
+            raise ScenarioError("start_from starts a tumbler: set rotation = \"tumbling\" "
+                                "and give either [inversion.start] or start_from",
+                                path=scenario.path, key="inversion.start_from")
+        if load_start is None:
+            raise ScenarioError("start_from needs the scenario reader of `attitude invert`",
+                                path=scenario.path, key="inversion.start_from")
+        start = load_start(scenario.path.parent / cfg["start_from"])
     if cfg["rotation"] != "tumbling" and cfg.get("period") is None:
         raise ScenarioError("give the sidereal period, or [min, max] to scan",
                             path=scenario.path, key="inversion.period")
@@ -278,7 +294,7 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
         result = invert(observations, cfg["rotation"], period=cfg.get("period"),
                         poles=cfg["poles"], rows=cfg["rows"], degree=cfg["degree"],
                         convexity=cfg["convexity"], max_iterations=cfg["max_iterations"],
-                        start=cfg.get("start"), alternatives=cfg["alternatives"])
+                        start=start, alternatives=cfg["alternatives"])
     except PhotometryError as err:      # the data cannot give what is asked: name the key
         key = {"observations": "lightcurves", None: "lightcurves"}.get(err.key, err.key)
         raise ScenarioError(err.reason, path=scenario.path, key=f"inversion.{key}") from None

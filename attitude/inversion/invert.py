@@ -22,6 +22,7 @@ import numpy as np
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
+from attitude.foundations.constants import OBLIQUITY_J2000
 from attitude.foundations.errors import PhotometryError
 from attitude.foundations.quantities import to_si
 from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex
@@ -41,10 +42,11 @@ from attitude.inversion.tumbler import (
 )
 from attitude.model.body import RigidBody
 from attitude.model.freebody import diagnose_many
-from attitude.model.sampling import tumbling_state
+from attitude.model.sampling import TUMBLING_PARAMETERS, tumbling_parameters, tumbling_state
 from attitude.model.shape import Polyhedron
 from attitude.model.state import AttitudeState
 from attitude.photometry.geometry import Geometry
+from attitude.propagation.torquefree import free_rotation
 
 __all__ = ["InversionResult", "PeriodScan", "invert", "period_scan", "period_grid", "pole_starts"]
 
@@ -232,10 +234,13 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
         principal-axis rotator.
         Tumbling: optional, the two fundamental periods of the lightcurve (s; default
         from :func:`~attitude.photometry.fit_periods`) when there is no ``start``.
-    start : dict, TumblerFit or InversionResult, optional
+    start : dict, TumblerFit, InversionResult, (RigidBody, AttitudeState), optional
         Tumbling only: the starting state, the eight parameters of
-        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s) or an earlier fit;
-        without it the state is searched from the data alone
+        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s), an earlier fit, or a
+        body and a state (a tuple, or a scenario with ``.body`` and ``.state``: the state
+        in ECLIPJ2000 or an equatorial J2000 frame, at any epoch: it is propagated,
+        torque free, to the first data epoch); without it the state is searched from the
+        data alone
         (:func:`~attitude.inversion.tumbler.search_tumbler`, a minute or more).
     alternatives : bool
         Tumbling only: also fit the other mode (SAM/LAM, at the same period ratio) and the
@@ -280,6 +285,9 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
         raise PhotometryError(f"rotation {rotation!r} is unknown; use 'auto', 'principal' "
                               "or 'tumbling'", key="rotation")
     observations = engine_blocks(observations)
+    if rotation == "tumbling" and start is not None and not isinstance(
+            start, (dict, TumblerFit, InversionResult, np.ndarray)):
+        start = _parameters_of_state(start, observations)
     _check_span(observations, period)
     _check_enough_points(observations, GaussianImage(rows, degree).n_coefficients
                          + (8 if rotation == "tumbling" else 3), rows, degree)
@@ -418,6 +426,52 @@ def _start_parameters(start) -> np.ndarray:
         raise PhotometryError(f"start: expected the 8 parameters {PARAMETERS}, got shape "
                               f"{p.shape}", key="start")
     return p
+
+
+#: Equatorial J2000 frames a start's state may be given in (turned to the ecliptic, the
+#: frame of the lightcurves' vectors; the ICRF's frame bias, 0.02 arcsec, is neglected
+#: in a start).
+_EQUATORIAL = ("ICRF", "GCRF", "EME2000", "J2000")
+
+
+def _parameters_of_state(start, observations) -> np.ndarray:
+    """The eight tumbler parameters at the first data epoch of a start given as a body and
+    a state: ``(RigidBody, AttitudeState)``, or any object with ``body`` and ``state``
+    (a scenario loaded by :func:`attitude.load_scenario`)."""
+    if isinstance(start, (tuple, list)) and len(start) == 2:
+        body, state = start
+    else:
+        body, state = getattr(start, "body", None), getattr(start, "state", None)
+    if not (isinstance(body, RigidBody) and isinstance(state, AttitudeState)):
+        raise PhotometryError("start: expected the eight parameters (a dict), a fit, or a "
+                              "body and a state ((RigidBody, AttitudeState) or a scenario "
+                              f"with .body and .state), got {type(start).__name__}",
+                              key="start")
+    frame = state.frame.upper()
+    attitude = state.attitude
+    if frame in _EQUATORIAL:
+        attitude = Rotation.from_rotvec([-OBLIQUITY_J2000, 0.0, 0.0]) * attitude
+    elif frame not in ("ECLIPJ2000", "ECLIPTIC_J2000"):
+        raise PhotometryError(f"start: the state's frame {state.frame} cannot be turned to "
+                              "the lightcurves' ecliptic J2000: give it in ECLIPJ2000 or an "
+                              "equatorial J2000 frame (ICRF, EME2000)", key="start.frame")
+    # the first data epoch: the tumbler's parameters are those of its state then
+    first = observations[0].epoch
+    t0 = min(float(o.time.min()) + float((o.epoch - first).to_value("s"))
+             for o in observations)
+    dt = float((first + TimeDelta(t0, format="sec") - state.epoch).to_value("s"))
+    moments = np.asarray(body.principal_moments, dtype=float)
+    b2p = body.body_to_principal
+    q, w = free_rotation(moments, (attitude * b2p.inv()).as_quat(),
+                         b2p.apply(state.omega_body), np.array([dt]))
+    moved = AttitudeState(state.epoch + TimeDelta(dt, format="sec"),
+                          Rotation.from_quat(q[0]) * b2p, b2p.inv().apply(w[0]),
+                          frame="ECLIPJ2000")
+    try:
+        params, _ = tumbling_parameters(body, moved)
+    except ValueError as err:
+        raise PhotometryError(f"start: {err}", key="start") from None
+    return np.array([params[k] for k in TUMBLING_PARAMETERS])
 
 
 def _other_mode(p: np.ndarray, regime: str):

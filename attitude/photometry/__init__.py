@@ -33,7 +33,8 @@ from attitude.photometry.scattering import (
     scattering_law,
 )
 
-__all__ = ["Geometry", "OrbitGeometry", "LightcurveObservations", "phase_angle", "reduced_magnitude", "Lightcurve", "lightcurve",
+__all__ = ["Geometry", "OrbitGeometry", "LightcurveObservations", "phase_angle",
+           "reduced_magnitude", "Lightcurve", "lightcurve",
            "facet_brightness", "LAWS", "ScatteringLaw", "Lambert", "LommelSeeliger",
            "LommelSeeligerLambert", "Hapke", "Phong", "AshikhminShirley", "FacetMaterials",
            "scattering_law", "PeriodFit", "fit_periods", "lattice_combination",

@@ -199,3 +199,52 @@ def test_fewer_points_than_parameters_exits_2(alcdef_scenario, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and ("one.toml: inversion.lightcurves: one.alcdef: 40 points for "
                               "52 parameters") in err[0]
+
+
+def test_a_tumbler_starts_from_a_scenarios_body_and_state(tmp_path, capsys):
+    """``start_from``: the [body] and [state] of a scenario file (ICRF, 1.3 d before the
+    data) start the tumbler's fit, which returns to the noise-free truth."""
+    from attitude.inversion.invert import _example_tumbler
+    from attitude.inversion.observations import engine_blocks
+    from attitude.model.state import format_epoch
+    from tests.inversion.test_observations_start import body_and_state
+
+    obs, truth = _example_tumbler()
+    _write_damit(tmp_path / "tumbler.txt", obs)
+    body, state = body_and_state(truth, engine_blocks(obs))
+    vector = ", ".join
+    q = vector(repr(float(x)) for x in state.attitude.as_quat())
+    (tmp_path / "guess.toml").write_text(f'''
+[scenario]
+name = "guess"
+[body]
+inertia = [{", ".join(f"[{vector(repr(float(x)) for x in row)}]" for row in body.inertia)}]
+[state]
+epoch = "{format_epoch(state.epoch.tdb)}"
+time_scale = "tdb"
+frame = "ICRF"
+attitude = {{ quaternion_scalar_last = [{q}] }}
+omega_body = {{ value = [{vector(repr(float(x)) for x in state.omega_body)}], unit = "rad/s" }}
+[propagation]
+duration = "1 h"
+step = "60 s"
+''')
+    path = tmp_path / "tumbler.toml"
+    path.write_text('''
+[scenario]
+name = "tumbler"
+[inversion]
+lightcurves = "tumbler.txt"
+time_scale = "tdb"
+rotation = "tumbling"
+start_from = "guess.toml"
+alternatives = false
+rows = 4
+degree = 2
+[expect]
+period = { value = 2.0, unit = "h", rel_tol = 1e-9 }
+rms = { max = 1e-9 }
+''')
+    report = tmp_path / "report.json"
+    assert main(["invert", str(path), "--quiet", "--report", str(report)]) == 0
+    assert [e["ok"] for e in json.loads(report.read_text())["expect"]] == [True, True]

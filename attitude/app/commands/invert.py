@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ...inversion.config import load_inversion, run_inversion
 from ...model.ephemeris import write_atomically
+from ..scenario import load_scenario
 from .common import EXIT_EXPECTATION, EXIT_OK, expectation_line
 
 #: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
@@ -14,10 +15,16 @@ from .common import EXIT_EXPECTATION, EXIT_OK, expectation_line
 __all__ = []
 
 
+def start_from_scenario(path) -> tuple:
+    """``(body, state)`` of a scenario file, for ``[inversion] start_from``."""
+    scenario = load_scenario(path)
+    return scenario.body, scenario.state
+
+
 def command(args) -> int:
     """``attitude invert``."""
     scenario = load_inversion(args.scenario)
-    run = run_inversion(scenario, output=args.output)
+    run = run_inversion(scenario, output=args.output, load_start=start_from_scenario)
     res = run.result
     if args.report:
         report = {"scenario": run.name, "regime": res.regime, "period": res.period,
