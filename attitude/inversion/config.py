@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import astropy.units as u
@@ -118,6 +118,10 @@ INVERSION = Table("inversion", (
         doc="weight of the convexity term"),
     Key("max_iterations", "integer", default=100, bounds=(1, None),
         doc="iterations of each fit"),
+    Key("map_longitudes", "integer", default=18, bounds=(2, 360),
+        doc="--plot: longitudes of the chi2 map over the pole (or L)"),
+    Key("map_latitudes", "integer", default=9, bounds=(3, 181),
+        doc="--plot: latitudes of the chi2 map, -90 to 90 deg"),
     Key("output", "string", doc="stem of the outputs, relative to the scenario file "
                                 "(default: the scenario file's stem)"),
 ))
@@ -221,7 +225,7 @@ def load_inversion(path) -> InversionScenario:
 @dataclass(frozen=True, eq=False)
 class InversionRun:
     """The outcome of :func:`run_inversion`: the result, the ``[expect]`` checks (the
-    dicts of the ``--report``) and the files written.
+    dicts of the ``--report``), the files written and the lightcurves inverted.
 
     Examples
     --------
@@ -233,6 +237,7 @@ class InversionRun:
     result: InversionResult
     expect: list
     outputs: list
+    observations: list = field(default_factory=list, repr=False)
 
     @property
     def ok(self) -> bool:
@@ -304,7 +309,7 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
         stem = Path(output) if output is not None else scenario.path.parent / cfg.get(
             "output", scenario.path.stem)
         outputs = _write(stem, scenario, result, observations)
-    return InversionRun(scenario.name, result, checks, outputs)
+    return InversionRun(scenario.name, result, checks, outputs, observations)
 
 
 def read_observations(scenario: InversionScenario) -> list:

@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from astropy.time import Time, TimeDelta
@@ -192,6 +193,8 @@ class InversionResult:
     fit : ConvexFit or TumblerFit
         The underlying fit (a tumbler's carries the eight parameters, their errors and
         the moment ratios of the shape: :class:`~attitude.inversion.tumbler.TumblerFit`).
+    scan : PeriodScan or None
+        The period scan, when a range was scanned.
 
     Examples
     --------
@@ -212,6 +215,7 @@ class InversionResult:
     dark_facet: float
     spin_axis_tilt: float
     fit: ConvexFit | TumblerFit = field(repr=False)
+    scan: PeriodScan | None = field(default=None, repr=False)
 
 
 def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10,
@@ -304,9 +308,11 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
         raise PhotometryError(f"{model.n_points} points for {n_parameters} parameters: "
                               "more data, or a lower degree", key="observations")
     p = np.atleast_1d(to_si(period, "s", name="period", error=PhotometryError))
+    scan = None
     if p.size == 2:
         span = float(np.ptp(model.time))
-        p0 = period_scan(observations, period_grid(span, *np.sort(p))).best
+        scan = period_scan(observations, period_grid(span, *np.sort(p)))
+        p0 = scan.best
     elif p.size == 1:
         p0 = float(p[0])
     else:
@@ -344,7 +350,7 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
                            pole=best.pole,
                            chi2=best.chi2, rms=best.rms, regime="PA-short",
                            alternatives=alternatives, dark_facet=best.dark_facet,
-                           spin_axis_tilt=tilt, fit=best)
+                           spin_axis_tilt=tilt, fit=best, scan=scan)
 
 
 def _files(observations) -> str:
@@ -386,6 +392,13 @@ def _pole_distance(a: ConvexFit, b: ConvexFit) -> float:
     v = [np.cos(b.latitude) * np.cos(b.longitude), np.cos(b.latitude) * np.sin(b.longitude),
          np.sin(b.latitude)]
     return float(np.arccos(np.clip(np.dot(u, v), -1.0, 1.0)))
+
+
+@lru_cache(maxsize=1)
+def _example_result() -> InversionResult:
+    """The inversion of :func:`_example_observations` (computed once, for the examples of
+    the figures)."""
+    return invert(_example_observations(), period=7200.0, poles=10, rows=4, degree=2)
 
 
 def _example_observations():

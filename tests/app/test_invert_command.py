@@ -248,3 +248,15 @@ rms = { max = 1e-9 }
     report = tmp_path / "report.json"
     assert main(["invert", str(path), "--quiet", "--report", str(report)]) == 0
     assert [e["ok"] for e in json.loads(report.read_text())["expect"]] == [True, True]
+
+
+def test_plot_writes_the_figures(scenario, capsys):
+    pytest.importorskip("matplotlib")
+    scenario.write_text(scenario.read_text().replace("degree = 2", "degree = 2\n"
+                                                     "map_longitudes = 6\nmap_latitudes = 3"))
+    assert main(["invert", str(scenario), "--plot"]) == 0
+    out = capsys.readouterr().out
+    for name in ("demo_fit.png", "demo_pole_map.png", "demo_shape_view.png"):
+        path = scenario.parent / name
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"wrote {path}" in out
+    assert not (scenario.parent / "demo_periodogram.png").exists()    # no scan ran
