@@ -114,7 +114,8 @@ def period_grid(span: float, p_min: float, p_max: float, step: float = 0.8) -> n
 
 
 def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree: int = 4,
-                max_iterations: int = 20) -> PeriodScan:
+                max_iterations: int = 20, client=None, chunks: int | None = None
+                ) -> PeriodScan:
     """chi2 of the best convex fit against trial period (``convexinv``'s period scan).
 
     Parameters
@@ -130,6 +131,12 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
         chi2 is lowest).
     max_iterations : int
         Iterations per fit.
+    client : dask.distributed.Client, optional
+        Scan on a dask cluster: one task per chunk of consecutive trial periods; the
+        result equals the sequential scan (each trial period's fits are independent of
+        the others').
+    chunks : int, optional
+        Number of chunks (default: twice the cluster's workers, at most one per period).
 
     Returns
     -------
@@ -144,7 +151,26 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
     ((2,), True)
     """
     periods = np.atleast_1d(to_si(periods, "s", name="periods", error=PhotometryError))
-    model = ConvexModel(engine_blocks(observations), GaussianImage(rows, degree))
+    blocks = engine_blocks(observations)
+    options = (poles, rows, degree, max_iterations)
+    if client is None:
+        chi2, ended = _scan_chunk(blocks, periods, options)
+    else:
+        n = chunks or 2 * max(1, len(client.scheduler_info().get("workers", {})))
+        parts = [c for c in np.array_split(periods, min(n, periods.size)) if c.size]
+        futures = [client.submit(_scan_chunk, blocks, part, options, pure=False)
+                   for part in parts]
+        results = client.gather(futures)
+        chi2 = np.concatenate([r[0] for r in results])
+        ended = np.concatenate([r[1] for r in results])
+    return PeriodScan(periods, chi2, ended)
+
+
+def _scan_chunk(blocks, periods, options) -> tuple[np.ndarray, np.ndarray]:
+    """The scan of some trial periods: the lowest chi2 over the pole starts and where
+    that fit ended, per period (one dask task)."""
+    poles, rows, degree, max_iterations = options
+    model = ConvexModel(blocks, GaussianImage(rows, degree))
     chi2 = np.empty(periods.size)
     ended = np.empty(periods.size)
     for i, p in enumerate(periods):
@@ -152,7 +178,7 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
                 for lon, lat in pole_starts(poles)]
         best = min(fits, key=lambda f: f.chi2)
         chi2[i], ended[i] = best.chi2, best.period
-    return PeriodScan(periods, chi2, ended)
+    return chi2, ended
 
 
 @dataclass(frozen=True, eq=False)
@@ -221,7 +247,7 @@ class InversionResult:
 def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10,
            rows: int = 8, degree: int = 6, convexity: float = 0.1,
            max_iterations: int = 100, start=None,
-           alternatives: bool = True) -> InversionResult:
+           alternatives: bool = True, client=None) -> InversionResult:
     """Shape, pole and rotation state from lightcurves alone.
 
     Parameters
@@ -256,6 +282,8 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     convexity : float
         Weight of the convexity term.
     max_iterations : int
+    client : dask.distributed.Client, optional
+        Run the period scan (a range given) on a dask cluster (:func:`period_scan`).
 
     Returns
     -------
@@ -311,7 +339,7 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     scan = None
     if p.size == 2:
         span = float(np.ptp(model.time))
-        scan = period_scan(observations, period_grid(span, *np.sort(p)))
+        scan = period_scan(observations, period_grid(span, *np.sort(p)), client=client)
         p0 = scan.best
     elif p.size == 1:
         p0 = float(p[0])
