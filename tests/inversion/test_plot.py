@@ -89,3 +89,16 @@ def test_the_shape_figure_draws_every_facet(tmp_path):
                                        "demo_shape_view.png"]
     for p in paths:
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_tumblers_map_is_over_the_direction_of_l():
+    from attitude.inversion.invert import _example_tumbler
+
+    obs, truth = _example_tumbler()
+    res = invert(obs, rotation="tumbling", start=truth, rows=4, degree=2,
+                 alternatives=False)
+    m = pole_map(obs, res, n_longitude=6, n_latitude=3, max_iterations=3)
+    assert m.kind == "L" and m.chi2.shape == (3, 6)
+    # noise-free data fitted to 1e-30: every direction but the solution's fits worse
+    assert np.isfinite(m.chi2).all() and m.chi2.min() > 1e3 * res.chi2
+    assert "angular momentum L" in pole_map_figure(m, res).axes[0].get_title()
