@@ -232,7 +232,9 @@ table: the lightcurve file with its geometry (DAMIT / convexinv format), the per
 [min, max] range to scan, the number of pole starts. Writes STEM_shape.obj (unit
 volume), STEM_state.toml (a scenario that `attitude run` propagates) and
 STEM_lightcurves.csv (data and model); prints the pole, its mirror, the period and the
-fit. The [expect] keys period, pole, rms and dark_facet are checked.
+fit. The [expect] keys period, pole, rms and dark_facet are checked. ALCDEF and CSV
+lightcurves take their geometry from the target's orbit ([inversion.orbit]); --plot
+writes STEM_fit.png, STEM_periodogram.png (a scan), STEM_pole_map.png, STEM_shape_view.png.
 
   attitude invert scenarios/inversion/ariadne.toml
   attitude run scenarios/inversion/ariadne_state.toml
@@ -403,6 +405,9 @@ def build_parser() -> argparse.ArgumentParser:
                            "scenario's stem)")
     invp.add_argument("--report", metavar="REPORT.json", help="write a JSON report")
     invp.add_argument("--quiet", action="store_true", help="print nothing on success")
+    invp.add_argument("--plot", action="store_true", help="write the data and model, the "
+                      "period scan, the chi2 map over the pole and the shape as PNG (needs "
+                      "matplotlib)")
     # --- pictures (issue 29) ---
     anim = sub.add_parser("animate", help="a movie of an ephemeris (MP4 or GIF)",
                           description=_ANIMATE_HELP,

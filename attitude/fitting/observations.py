@@ -9,7 +9,8 @@ uncertainties (so that the sum of squares is chi^2):
 - :class:`AngularVelocityObservations` -- measured body rates with a 1-sigma;
 - :class:`PeriodObservations` -- periods with their 1-sigma, under the period keys of
   :func:`attitude.diagnose` (``precession`` P_phi, ``rotation`` P_psi, ``polhode``, ``spin``);
-- :class:`LightcurveObservations` -- magnitudes with their 1-sigma, the Sun/observer
+- :class:`LightcurveObservations` (photometry's, the one type of a lightcurve with its
+  geometry, which the inversion reads too) -- magnitudes with their 1-sigma, the Sun/observer
   geometry, a shape and a scattering law: the model magnitude is the shape's brightness
   (:func:`attitude.photometry.facet_brightness`) in the modelled attitude, plus one
   fitted offset per observing session (the absolute magnitude and the nightly zero
@@ -29,27 +30,10 @@ from ..foundations import quaternion as quat
 from ..foundations.errors import AttitudeError
 from ..foundations.quantities import to_si
 from ..model.regimes import PERIOD_KEYS
-from ..photometry.brightness import facet_brightness
-from ..photometry.geometry import Geometry
+from ..photometry.observations import LightcurveObservations, seconds_since
 
 __all__ = ["AttitudeObservations", "AngularVelocityObservations", "PeriodObservations",
            "LightcurveObservations", "seconds_since"]
-
-
-def seconds_since(epoch: Time, times) -> np.ndarray:
-    """Observation times as seconds since ``epoch``: an astropy Time array (converted
-    with the epoch's scale) or plain seconds already counted from it.
-
-    Examples
-    --------
-    >>> from astropy.time import Time
-    >>> e = Time("2029-04-13T00:00:00", scale="tdb")
-    >>> seconds_since(e, Time(["2029-04-13T00:01:00"], scale="tdb"))
-    array([60.])
-    """
-    if isinstance(times, Time):
-        return np.atleast_1d((times - epoch).to_value("s"))
-    return np.atleast_1d(to_si(times, "s", name="times", error=AttitudeError))
 
 
 def _si(value, unit: str, key: str):
@@ -209,177 +193,3 @@ class PeriodObservations:
         """(N, k) period differences over sigma (NaN where the model has no such period)."""
         return np.stack([(periods[k] - v) / s for k, (v, s) in self.periods.items()],
                         axis=-1)
-
-
-@dataclass(frozen=True)
-class LightcurveObservations:
-    """Measured magnitudes of a body of known shape, with their 1-sigma and geometry.
-
-    Parameters
-    ----------
-    times : astropy Time array, or seconds since the fit's epoch
-        Observation (reception) times; the attitude is modelled at ``times -
-        geometry.light_time`` when the geometry carries light times.
-    magnitudes : (n,) array
-    sigma : float or (n,) array
-        1-sigma of each magnitude, mag.
-    geometry : attitude.photometry.Geometry
-        Sun and observer directions (inertial frame of the fit), constant or per epoch.
-    shape : attitude.Polyhedron
-        The body's shape in the body frame of the fit.
-    law : str or scattering law
-        As in :func:`attitude.photometry.dataset` (default ``"ls-lambert"``).
-    sessions : (n,) array, optional
-        Session label of each magnitude (the ``session`` variable of
-        :func:`attitude.photometry.read_lightcurve`: an ALCDEF block, a night): each
-        session gets its own magnitude offset.  Default: one session.
-
-    Attributes
-    ----------
-    session_labels : (S,) array
-        The distinct session labels, sorted (``[0]`` for one session).
-    session_index : (n,) int array
-        The session of each magnitude, as an index into ``session_labels``.
-    session_weight : (S,) array
-        ``sum(1/sigma^2)`` of each session (the inverse variance of its offset at fixed
-        rotation parameters).
-
-    Notes
-    -----
-    The model magnitude is ``-2.5 log10(flux) + offset_s`` with one offset per session
-    ``s``.  Differential magnitudes of different nights have independent zero points
-    (comparison stars, extinction, filters), so the offsets are unknown; they enter the
-    model linearly, and for fixed rotation parameters the least-squares offset of a
-    session is the weighted mean residual of its magnitudes,
-    ``offset_s = sum_i w_i (m_i - model_i) / sum_i w_i`` (``w = 1/sigma^2``, ``i`` in
-    ``s``).  The residuals are evaluated with these offsets (they are *profiled out*,
-    the variable projection of Golub & Pereyra 1973), so the solver sees only the
-    rotation parameters:
-
-    - chi^2 at the optimum is the joint minimum over rotation and offsets, and the
-      offsets are counted in the degrees of freedom (:attr:`n_nuisance`, one per
-      session);
-    - the Jacobian of the profiled residuals is the rotation Jacobian with its
-      session means removed, so ``(J^T J)^-1`` is the covariance of the rotation
-      parameters *marginalised* over the offsets (the Schur complement of the joint
-      normal matrix), not the smaller one at fixed offsets;
-    - the posterior (:func:`attitude.fitting.sample_posterior`) of the profiled chi^2 is
-      the posterior marginalised over offsets with flat priors (the Gaussian integral
-      over a linear parameter is a constant);
-    - :meth:`offsets` gives the offsets of a model; with their 1-sigma,
-      :meth:`attitude.fitting.FitResult.lightcurve_offsets`.
-
-    Examples
-    --------
-    >>> import numpy as np, attitude as att
-    >>> shape = att.Polyhedron.ellipsoid(2.0, 1.2, 1.0, subdivisions=2)
-    >>> geom = att.Geometry(sun=[1.0, 0, 0], observer=[np.cos(0.3), np.sin(0.3), 0])
-    >>> obs = LightcurveObservations([0.0, 60.0], [15.0, 15.2], 0.01, geom, shape)
-    >>> obs.n_residuals, obs.n_nuisance
-    (2, 1)
-    >>> two = LightcurveObservations([0.0, 60.0, 86400.0], [15.0, 15.2, 14.1], 0.01, geom,
-    ...                              shape, sessions=["night 1", "night 1", "night 2"])
-    >>> two.n_nuisance, two.session_labels.tolist()
-    (2, ['night 1', 'night 2'])
-    """
-
-    times: object
-    magnitudes: np.ndarray
-    sigma: object
-    geometry: Geometry
-    shape: object
-    law: object = "ls-lambert"
-    delay: np.ndarray = None
-    sessions: object = None
-
-    def __post_init__(self):
-        m = np.asarray(self.magnitudes, dtype=float)
-        if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)):
-            raise AttitudeError(f"expected a non-empty 1-D array of finite magnitudes, got "
-                                f"shape {m.shape}", key="magnitudes")
-        object.__setattr__(self, "magnitudes", m)
-        object.__setattr__(self, "times", _times(self.times, m.size, "times"))
-        sig = np.asarray(self.sigma, dtype=float)
-        if sig.shape not in ((), m.shape) or not np.all(np.isfinite(sig) & (sig > 0)):
-            raise AttitudeError(f"expected one or {m.size} finite, positive magnitude "
-                                f"uncertainties", key="sigma")
-        object.__setattr__(self, "sigma", np.broadcast_to(sig, m.shape).copy())
-        if not isinstance(self.geometry, Geometry):
-            raise AttitudeError("expected an attitude.photometry.Geometry", key="geometry")
-        sun, observer = self.geometry.broadcast(m.size)
-        object.__setattr__(self, "_sun", sun)
-        object.__setattr__(self, "_observer", observer)
-        lt = self.geometry.light_time
-        object.__setattr__(self, "delay", np.zeros(m.size) if lt is None else
-                           np.broadcast_to(np.asarray(lt, dtype=float), m.shape).copy())
-        if self.sessions is None:
-            labels, index = np.zeros(1, dtype=int), np.zeros(m.size, dtype=int)
-        else:
-            s = np.asarray(self.sessions)
-            if s.shape != m.shape:
-                raise AttitudeError(f"expected one session label per magnitude ({m.size}), "
-                                    f"got shape {s.shape}", key="sessions")
-            labels, index = np.unique(s, return_inverse=True)
-        object.__setattr__(self, "sessions", None if self.sessions is None else
-                           np.asarray(self.sessions))
-        object.__setattr__(self, "session_labels", labels)
-        object.__setattr__(self, "session_index", index.reshape(-1))
-        weight = 1.0 / self.sigma**2
-        object.__setattr__(self, "_weight", weight)
-        object.__setattr__(self, "session_weight",
-                           np.bincount(index.reshape(-1), weight, minlength=labels.size))
-
-    @property
-    def n_residuals(self) -> int:
-        """Number of residuals (one per magnitude)."""
-        return self.magnitudes.size
-
-    @property
-    def n_nuisance(self) -> int:
-        """Number of fitted offsets (one per session), counted in the degrees of freedom."""
-        return int(self.session_labels.size)
-
-    def model_magnitudes(self, q: np.ndarray) -> np.ndarray:
-        """(N, n) magnitudes (without the offset) of the attitudes ``q`` (N, n, 4)."""
-        inv = quat.conjugate(q)
-        sun_b = quat.rotate(inv, self._sun[None])
-        obs_b = quat.rotate(inv, self._observer[None])
-        flux, _ = facet_brightness(self.shape, sun_b.reshape(-1, 3), obs_b.reshape(-1, 3),
-                                   self.law)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return -2.5 * np.log10(flux.reshape(q.shape[:-1]))
-
-    def _offsets(self, model: np.ndarray) -> np.ndarray:
-        """(N, S) least-squares offsets of the model magnitudes (N, n), per session."""
-        weighted = (self.magnitudes - model) * self._weight
-        n_sessions = self.session_labels.size
-        flat = self.session_index[None] + n_sessions * np.arange(model.shape[0])[:, None]
-        sums = np.bincount(flat.ravel(), weighted.ravel(),
-                           minlength=n_sessions * model.shape[0])
-        return sums.reshape(model.shape[0], n_sessions) / self.session_weight
-
-    def offsets(self, q: np.ndarray) -> np.ndarray:
-        """(N, S) magnitude offsets per session (order of :attr:`session_labels`) that
-        minimise chi^2 for the attitudes ``q`` (N, n, 4): the weighted mean residuals.
-
-        Examples
-        --------
-        >>> import numpy as np, attitude as att
-        >>> shape = att.Polyhedron.ellipsoid(2.0, 1.2, 1.0, subdivisions=1)
-        >>> geom = att.Geometry(sun=[1.0, 0, 0], observer=[np.cos(0.3), np.sin(0.3), 0])
-        >>> q = np.tile([0.0, 0.0, 0.0, 1.0], (1, 3, 1))          # fixed attitude
-        >>> clean = LightcurveObservations([0.0, 1.0, 2.0], [0.0] * 3, 0.01, geom, shape)
-        >>> m = clean.model_magnitudes(q)[0]
-        >>> obs = LightcurveObservations([0.0, 1.0, 2.0], m + [3.0, 3.0, 5.5], 0.01, geom,
-        ...                              shape, sessions=[1, 1, 2])
-        >>> obs.offsets(q).round(12).tolist()
-        [[3.0, 5.5]]
-        """
-        return self._offsets(self.model_magnitudes(q))
-
-    def residuals(self, q: np.ndarray, w: np.ndarray, periods: dict) -> np.ndarray:
-        """(N, n) magnitude residuals over sigma, the best offset of each session
-        removed per model."""
-        model = self.model_magnitudes(q)
-        offset = self._offsets(model)
-        return (model + offset[:, self.session_index] - self.magnitudes) / self.sigma

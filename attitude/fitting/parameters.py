@@ -40,22 +40,17 @@ from scipy.spatial.transform import Rotation
 from ..foundations import quaternion as quat
 from ..model.body import RigidBody
 from ..model.freebody import diagnose_many
-from ..model.sampling import tumbling_state
-from ..model.state import AttitudeState, direction_frame
+from ..model.sampling import TUMBLING_PARAMETERS, tumbling_parameters, tumbling_state
+from ..model.state import AttitudeState
 from ..propagation.torquefree import free_rotation
 
 __all__ = ["PARAMETERS", "ANGLES", "RotationModel", "free_parameters"]
 
 #: The parameter names, in the order of the parameter vectors.
-PARAMETERS = ("angular_momentum_ra", "angular_momentum_dec", "energy_ratio", "ratio_a",
-              "ratio_b", "precession_period", "phi0", "psi0")
+PARAMETERS = TUMBLING_PARAMETERS
 #: The parameters that are angles (wrapped, and reported in degrees by the CLI).
 ANGLES = ("angular_momentum_ra", "angular_momentum_dec", "phi0", "psi0")
 
-# principal -> kernel frame of a LAM state (A along the kernel z), as in sampling
-_LAM_KERNEL = Rotation.from_matrix([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
-_HALF_TURNS = {"C": Rotation.from_rotvec([np.pi, 0.0, 0.0]),     # flips B and C
-               "A": Rotation.from_rotvec([0.0, 0.0, np.pi])}     # flips A and B
 
 
 @dataclass(frozen=True)
@@ -164,35 +159,7 @@ def free_parameters(body: RigidBody, state: AttitudeState) -> tuple[dict, Rotati
     >>> bool(np.allclose(s2.omega_body, state.omega_body, rtol=1e-12, atol=1e-14))
     True
     """
-    moments = np.asarray(body.principal_moments, dtype=float)
-    A, B, C = moments
-    b2p = body.body_to_principal
-    w_p = b2p.apply(state.omega_body)
-    L_p = moments * w_p
-    L2 = float(L_p @ L_p)
-    if L2 == 0:
-        raise ValueError("a body at rest has no rotation parameters")
-    er = float(moments @ (w_p * w_p)) * C / L2
-    lam = er > C / B
-    axis = "A" if lam else "C"
-    if (L_p[0] if lam else L_p[2]) < 0:       # turn the principal frame by a half-turn
-        b2p = _HALF_TURNS[axis] * b2p
-        w_p = _HALF_TURNS[axis].apply(w_p)
-        L_p = moments * w_p
-    q_p2i = state.attitude * b2p.inv()
-    L_i = q_p2i.apply(L_p)
-    ra = float(np.arctan2(L_i[1], L_i[0]) % (2 * np.pi))
-    dec = float(np.arcsin(np.clip(L_i[2] / np.sqrt(L2), -1.0, 1.0)))
-    d = diagnose_many(moments[None], w_p[None])
-    pphi = float(d["precession"][0])
-    if not np.isfinite(pphi):
-        raise ValueError(f"the state ({d['regime'][0]}) has no precession period: the "
-                         "parameterisation needs a tumbling (SAM or LAM) triaxial state")
-    kernel = _LAM_KERNEL if lam else Rotation.identity()
-    r_l = Rotation.from_matrix(direction_frame(ra, dec))
-    euler = r_l.inv() * q_p2i * kernel.inv()
-    phi, _, psi = euler.as_euler("ZXZ")
-    params = dict(zip(PARAMETERS, (ra, dec, float(er), float(A / C), float(B / C), pphi,
-                                   float(phi % (2 * np.pi)), float(psi % (2 * np.pi)))))
-    model = RotationModel(state.epoch, b2p.as_quat(), float(C), state.frame)
+    params, b2p = tumbling_parameters(body, state)
+    C = float(np.max(body.principal_moments))
+    model = RotationModel(state.epoch, b2p.as_quat(), C, state.frame)
     return params, model

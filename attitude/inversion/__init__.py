@@ -19,10 +19,16 @@ from attitude.inversion.invert import (
     pole_starts,
 )
 from attitude.inversion.minkowski import facet_mesh, polyhedron_from_areas, support_polyhedron
-from attitude.inversion.observations import ObservedLightcurve, read_damit_lightcurves
+from attitude.inversion.observations import (
+    LightcurveObservations,
+    ObservedLightcurve,
+    engine_blocks,
+    read_damit_lightcurves,
+)
 from attitude.inversion.tumbler import TumblerFit, fit_tumbler
 
-__all__ = ["ObservedLightcurve", "read_damit_lightcurves", "GaussianImage",
+__all__ = ["LightcurveObservations", "ObservedLightcurve", "engine_blocks",
+           "read_damit_lightcurves", "GaussianImage",
            "real_harmonics", "sphere_triangulation", "ConvexModel", "ConvexFit", "fit_convex",
            "spin_to_body", "invert", "period_scan", "period_grid", "pole_starts",
            "InversionResult", "PeriodScan", "polyhedron_from_areas", "support_polyhedron",

@@ -26,21 +26,30 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import astropy.units as u
 import numpy as np
+from astropy.time import TimeDelta
 
-from attitude.foundations.errors import AttitudeError, ScenarioError
+from attitude.foundations.errors import AttitudeError, PhotometryError, ScenarioError
 from attitude.foundations.expectation import Expectation
 from attitude.foundations.spec import Key, Table, validate
 from attitude.inversion.invert import InversionResult, invert
-from attitude.inversion.observations import read_damit_lightcurves
+from attitude.inversion.observations import engine_blocks, read_damit_lightcurves
 from attitude.model.ephemeris import AtomicFiles
+from attitude.model.orbit import KeplerOrbit
 from attitude.model.state import format_epoch
+from attitude.photometry.config import ORBIT as PHOTOMETRY_ORBIT
+from attitude.photometry.geometry import Geometry
+from attitude.photometry.readers import read_lightcurve
 
-__all__ = ["INVERSION", "InversionRun", "load_inversion", "run_inversion", "is_inversion"]
+__all__ = ["INVERSION", "InversionRun", "load_inversion", "run_inversion", "is_inversion",
+           "read_observations"]
+
+#: The Sun's gravitational parameter, m^3/s^2 (IAU 2015 nominal), for [inversion.orbit].
+GM_SUN = 1.32712440018e20
 
 #: ``[inversion.start]``: a tumbler's starting state (the parameters of API "Fitting").
 START = Table("start", (
@@ -56,14 +65,38 @@ START = Table("start", (
     Key("psi0", "quantity", unit="rad", required=True, doc="rotation angle at the start"),
 ))
 
+#: ``[inversion.orbit]``: the target's heliocentric orbit, for the geometry of ALCDEF
+#: and CSV lightcurves (:meth:`attitude.photometry.Geometry.from_orbit`).
+ORBIT = Table("orbit", (
+    Key("epoch", "time", required=True,
+        doc="epoch of the elements (of the mean anomaly), ISO 8601 in time_scale"),
+    Key("time_scale", "string", default="tdb", choices=("utc", "tt", "tdb"),
+        doc="scale of the epoch"),
+    Key("mu", "quantity", unit="m3/s2", positive=True,
+        doc="gravitational parameter of the Sun (default 1.32712440018e20 m3/s2)"),
+    *(key for key in PHOTOMETRY_ORBIT.keys if key.name != "mu"),
+), doc="Keplerian elements, heliocentric, ecliptic and equinox J2000")
+
 #: The ``[inversion]`` table.
 INVERSION = Table("inversion", (
     Key("lightcurves", "string", required=True,
-        doc="lightcurve file with its geometry (DAMIT / convexinv format), relative to "
-            "the scenario file"),
-    Key("format", "string", default="damit", choices=("damit",), doc="file format"),
+        doc="lightcurve file, relative to the scenario file: DAMIT / convexinv (with its "
+            "geometry), or ALCDEF / CSV (with [inversion.orbit] for the geometry)"),
+    Key("format", "string", default="auto", choices=("auto", "damit", "alcdef", "csv"),
+        doc="file format (auto: .csv is CSV, a STARTMETADATA line ALCDEF, else DAMIT)"),
     Key("time_scale", "string", default="utc", choices=("utc", "tt", "tdb"),
-        doc="time scale of the file's Julian dates"),
+        doc="time scale of the file's Julian dates (DAMIT, CSV; ALCDEF's are UTC)"),
+    Key("orbit", "table", table=ORBIT,
+        doc="ALCDEF / CSV: the target's orbit, for the Sun and observer of every point"),
+    Key("observer", "string", default="earth", choices=("earth", "sun"),
+        doc="ALCDEF / CSV: the observer (the geocentre, astropy's built-in ephemeris)"),
+    Key("light_time", "boolean", default=True,
+        doc="ALCDEF / CSV: correct for the light time (the file's times are the "
+            "observer's)"),
+    Key("sigma", "quantity", unit="mag", positive=True,
+        doc="ALCDEF / CSV: the 1-sigma of points the file gives none for"),
+    Key("calibrated", "boolean", default=False,
+        doc="ALCDEF / CSV: magnitudes reduced to unit distances (default relative)"),
     Key("rotation", "string", default="auto", choices=("auto", "principal", "tumbling"),
         doc="the rotation fitted: a principal-axis spin, or a tumbler"),
     Key("period", "quantity", unit="s", shape=((), (2,)), positive=True,
@@ -71,6 +104,9 @@ INVERSION = Table("inversion", (
             "tumbling: the two fundamental periods, optional)"),
     Key("start", "table", table=START,
         doc="tumbling: the starting state (without it, the search from the data)"),
+    Key("start_from", "string",
+        doc="tumbling: a scenario file whose [body] and [state] start the fit (relative "
+            "to this file; the state at any epoch, ECLIPJ2000 or equatorial J2000)"),
     Key("alternatives", "boolean", default=True,
         doc="tumbling: also fit the other mode and the mirror L"),
     Key("poles", "integer", default=10, bounds=(1, None), doc="pole starts"),
@@ -82,6 +118,10 @@ INVERSION = Table("inversion", (
         doc="weight of the convexity term"),
     Key("max_iterations", "integer", default=100, bounds=(1, None),
         doc="iterations of each fit"),
+    Key("map_longitudes", "integer", default=18, bounds=(2, 360),
+        doc="--plot: longitudes of the chi2 map over the pole (or L)"),
+    Key("map_latitudes", "integer", default=9, bounds=(3, 181),
+        doc="--plot: latitudes of the chi2 map, -90 to 90 deg"),
     Key("output", "string", doc="stem of the outputs, relative to the scenario file "
                                 "(default: the scenario file's stem)"),
 ))
@@ -185,7 +225,7 @@ def load_inversion(path) -> InversionScenario:
 @dataclass(frozen=True, eq=False)
 class InversionRun:
     """The outcome of :func:`run_inversion`: the result, the ``[expect]`` checks (the
-    dicts of the ``--report``) and the files written.
+    dicts of the ``--report``), the files written and the lightcurves inverted.
 
     Examples
     --------
@@ -197,6 +237,7 @@ class InversionRun:
     result: InversionResult
     expect: list
     outputs: list
+    observations: list = field(default_factory=list, repr=False)
 
     @property
     def ok(self) -> bool:
@@ -204,8 +245,8 @@ class InversionRun:
         return all(check["ok"] for check in self.expect)
 
 
-def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bool = True
-                  ) -> InversionRun:
+def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bool = True,
+                  load_start=None) -> InversionRun:
     """Invert the scenario's lightcurves, check ``[expect]``, write the outputs.
 
     Parameters
@@ -216,6 +257,9 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
         Stem of the outputs (default: ``[inversion] output``, else the scenario's stem).
     write_outputs : bool
         False for a check that writes nothing.
+    load_start : callable, optional
+        ``path -> (RigidBody, AttitudeState)``: reads ``[inversion] start_from`` (the
+        application's scenario reader, which this wing cannot import).
 
     Examples
     --------
@@ -237,26 +281,96 @@ def run_inversion(scenario: InversionScenario, *, output=None, write_outputs: bo
     (True, ['x_shape.obj', 'x_state.toml', 'x_lightcurves.csv'])
     """
     cfg = scenario.inversion
-    data = (scenario.path.parent / cfg["lightcurves"])
-    try:
-        observations = read_damit_lightcurves(data, time_scale=cfg["time_scale"])
-    except AttitudeError as err:
-        raise ScenarioError(err.reason, path=err.path or data,
-                            key=err.key or "inversion.lightcurves") from None
+    observations = read_observations(scenario)
+    start = cfg.get("start")
+    if "start_from" in cfg:
+        if "start" in cfg or cfg["rotation"] != "tumbling":
+            raise ScenarioError("start_from starts a tumbler: set rotation = \"tumbling\" "
+                                "and give either [inversion.start] or start_from",
+                                path=scenario.path, key="inversion.start_from")
+        if load_start is None:
+            raise ScenarioError("start_from needs the scenario reader of `attitude invert`",
+                                path=scenario.path, key="inversion.start_from")
+        start = load_start(scenario.path.parent / cfg["start_from"])
     if cfg["rotation"] != "tumbling" and cfg.get("period") is None:
         raise ScenarioError("give the sidereal period, or [min, max] to scan",
                             path=scenario.path, key="inversion.period")
-    result = invert(observations, cfg["rotation"], period=cfg.get("period"),
-                    poles=cfg["poles"], rows=cfg["rows"], degree=cfg["degree"],
-                    convexity=cfg["convexity"], max_iterations=cfg["max_iterations"],
-                    start=cfg.get("start"), alternatives=cfg["alternatives"])
+    try:
+        result = invert(observations, cfg["rotation"], period=cfg.get("period"),
+                        poles=cfg["poles"], rows=cfg["rows"], degree=cfg["degree"],
+                        convexity=cfg["convexity"], max_iterations=cfg["max_iterations"],
+                        start=start, alternatives=cfg["alternatives"])
+    except PhotometryError as err:      # the data cannot give what is asked: name the key
+        key = {"observations": "lightcurves", None: "lightcurves"}.get(err.key, err.key)
+        raise ScenarioError(err.reason, path=scenario.path, key=f"inversion.{key}") from None
     checks = _checks(scenario.expect, result)
     outputs = []
     if write_outputs:
         stem = Path(output) if output is not None else scenario.path.parent / cfg.get(
             "output", scenario.path.stem)
         outputs = _write(stem, scenario, result, observations)
-    return InversionRun(scenario.name, result, checks, outputs)
+    return InversionRun(scenario.name, result, checks, outputs, observations)
+
+
+def read_observations(scenario: InversionScenario) -> list:
+    """The scenario's lightcurves with their geometry, as the convex engine's blocks (one
+    per lightcurve of a DAMIT file, one per session of an ALCDEF or CSV file).
+
+    Raises
+    ------
+    ScenarioError
+        Naming the lightcurve file and its line (or the scenario's key): a malformed
+        file, an ALCDEF / CSV file without ``[inversion.orbit]``, a DAMIT file with one.
+
+    Examples
+    --------
+    See :func:`run_inversion`; docs/inversion.md for an ALCDEF file and its orbit.
+    >>> read_observations.__name__
+    'read_observations'
+    """
+    cfg = scenario.inversion
+    data = scenario.path.parent / cfg["lightcurves"]
+    kind = cfg["format"] if cfg["format"] != "auto" else _sniff(data)
+    if kind == "damit" and "orbit" in cfg:
+        raise ScenarioError("a DAMIT file carries its own geometry: remove "
+                            "[inversion.orbit] (or set format for an ALCDEF / CSV file)",
+                            path=scenario.path, key="inversion.orbit")
+    if kind != "damit" and "orbit" not in cfg:
+        raise ScenarioError(f"the {kind.upper()} file {cfg['lightcurves']} has no geometry: "
+                            "give the target's orbit, [inversion.orbit] with epoch, a, e, "
+                            "i, raan, argp, mean_anomaly (docs/inversion.md)",
+                            path=scenario.path, key="inversion.orbit")
+    try:
+        if kind == "damit":
+            return engine_blocks(read_damit_lightcurves(data, time_scale=cfg["time_scale"]))
+        orbit = dict(cfg["orbit"])
+        epoch = orbit.pop("epoch")
+        orbit.pop("time_scale", None)
+        orbit.setdefault("mu", GM_SUN)
+        recipe = Geometry.from_orbit(KeplerOrbit.from_elements(**orbit),
+                                     observer=cfg["observer"], epoch=epoch,
+                                     light_time=cfg["light_time"])
+        options = {"time_scale": cfg["time_scale"]} if kind == "csv" else {}
+        return engine_blocks(read_lightcurve(data, format=kind, geometry=recipe,
+                                             sigma=cfg.get("sigma"),
+                                             calibrated=cfg["calibrated"], **options))
+    except AttitudeError as err:
+        raise ScenarioError(err.reason, path=err.path or data,
+                            key=err.key or "inversion.lightcurves") from None
+
+
+def _sniff(path: Path) -> str:
+    """``csv`` for a .csv file, ``alcdef`` for a file with a STARTMETADATA line, else
+    ``damit``."""
+    if path.suffix.lower() == ".csv":
+        return "csv"
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            head = [next(f, "") for _ in range(200)]
+    except OSError:
+        return "damit"              # the reader names the file and why
+    return "alcdef" if any(line.strip().upper() == "STARTMETADATA" for line in head) \
+        else "damit"
 
 
 def _checks(expect: dict, result: InversionResult) -> list[dict]:
@@ -343,14 +457,15 @@ def _write(stem: Path, scenario, result: InversionResult, observations) -> list[
         f'step = "{result.period / 100:.9g} s"',
         "",
     ])
-    rows = ["lightcurve,jd,data,model"]   # relative lightcurves: each over its mean
+    # relative lightcurves: each over its mean; jd: TDB at the body (light time removed)
+    rows = ["lightcurve,jd,data,model"]
     start = 0
     for k, obs in enumerate(observations):
         y = obs.brightness if obs.calibrated else obs.brightness / obs.brightness.mean()
         model = result.fit.model[start:start + len(obs)]
         start += len(obs)
-        rows += [f"{k + 1},{t:.8f},{d:.8g},{m:.8g}"
-                 for t, d, m in zip(obs.times.jd, y, model)]
+        body = (obs.epoch + TimeDelta(obs.time, format="sec")).tdb.jd
+        rows += [f"{k + 1},{t:.8f},{d:.8g},{m:.8g}" for t, d, m in zip(body, y, model)]
     with AtomicFiles(shape_path, state_path, curves_path) as files:
         files[shape_path].write_text(result.shape.obj_text(comment=comment))
         files[state_path].write_text(state_text)

@@ -17,17 +17,19 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
+from attitude.foundations.constants import OBLIQUITY_J2000
 from attitude.foundations.errors import PhotometryError
 from attitude.foundations.quantities import to_si
 from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex
 from attitude.inversion.gaussian_image import GaussianImage
 from attitude.inversion.minkowski import polyhedron_from_areas
-from attitude.inversion.observations import ObservedLightcurve
+from attitude.inversion.observations import ObservedLightcurve, engine_blocks
 from attitude.inversion.tumbler import (
     EXAMPLE_SHAPE,
     EXAMPLE_STATE,
@@ -41,10 +43,11 @@ from attitude.inversion.tumbler import (
 )
 from attitude.model.body import RigidBody
 from attitude.model.freebody import diagnose_many
-from attitude.model.sampling import tumbling_state
+from attitude.model.sampling import TUMBLING_PARAMETERS, tumbling_parameters, tumbling_state
 from attitude.model.shape import Polyhedron
 from attitude.model.state import AttitudeState
 from attitude.photometry.geometry import Geometry
+from attitude.propagation.torquefree import free_rotation
 
 __all__ = ["InversionResult", "PeriodScan", "invert", "period_scan", "period_grid", "pole_starts"]
 
@@ -111,12 +114,14 @@ def period_grid(span: float, p_min: float, p_max: float, step: float = 0.8) -> n
 
 
 def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree: int = 4,
-                max_iterations: int = 20) -> PeriodScan:
+                max_iterations: int = 20, client=None, chunks: int | None = None
+                ) -> PeriodScan:
     """chi2 of the best convex fit against trial period (``convexinv``'s period scan).
 
     Parameters
     ----------
-    observations : list of ObservedLightcurve
+    observations : LightcurveObservations or list of them
+        As for :func:`invert`.
     periods : array or Quantity
         Trial periods (s), spaced finely enough (:func:`period_grid`).
     poles : int
@@ -126,6 +131,12 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
         chi2 is lowest).
     max_iterations : int
         Iterations per fit.
+    client : dask.distributed.Client, optional
+        Scan on a dask cluster: one task per chunk of consecutive trial periods; the
+        result equals the sequential scan (each trial period's fits are independent of
+        the others').
+    chunks : int, optional
+        Number of chunks (default: twice the cluster's workers, at most one per period).
 
     Returns
     -------
@@ -140,7 +151,26 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
     ((2,), True)
     """
     periods = np.atleast_1d(to_si(periods, "s", name="periods", error=PhotometryError))
-    model = ConvexModel(list(observations), GaussianImage(rows, degree))
+    blocks = engine_blocks(observations)
+    options = (poles, rows, degree, max_iterations)
+    if client is None:
+        chi2, ended = _scan_chunk(blocks, periods, options)
+    else:
+        n = chunks or 2 * max(1, len(client.scheduler_info().get("workers", {})))
+        parts = [c for c in np.array_split(periods, min(n, periods.size)) if c.size]
+        futures = [client.submit(_scan_chunk, blocks, part, options, pure=False)
+                   for part in parts]
+        results = client.gather(futures)
+        chi2 = np.concatenate([r[0] for r in results])
+        ended = np.concatenate([r[1] for r in results])
+    return PeriodScan(periods, chi2, ended)
+
+
+def _scan_chunk(blocks, periods, options) -> tuple[np.ndarray, np.ndarray]:
+    """The scan of some trial periods: the lowest chi2 over the pole starts and where
+    that fit ended, per period (one dask task)."""
+    poles, rows, degree, max_iterations = options
+    model = ConvexModel(blocks, GaussianImage(rows, degree))
     chi2 = np.empty(periods.size)
     ended = np.empty(periods.size)
     for i, p in enumerate(periods):
@@ -148,7 +178,7 @@ def period_scan(observations, periods, *, poles: int = 6, rows: int = 6, degree:
                 for lon, lat in pole_starts(poles)]
         best = min(fits, key=lambda f: f.chi2)
         chi2[i], ended[i] = best.chi2, best.period
-    return PeriodScan(periods, chi2, ended)
+    return chi2, ended
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,6 +219,8 @@ class InversionResult:
     fit : ConvexFit or TumblerFit
         The underlying fit (a tumbler's carries the eight parameters, their errors and
         the moment ratios of the shape: :class:`~attitude.inversion.tumbler.TumblerFit`).
+    scan : PeriodScan or None
+        The period scan, when a range was scanned.
 
     Examples
     --------
@@ -209,18 +241,21 @@ class InversionResult:
     dark_facet: float
     spin_axis_tilt: float
     fit: ConvexFit | TumblerFit = field(repr=False)
+    scan: PeriodScan | None = field(default=None, repr=False)
 
 
 def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10,
            rows: int = 8, degree: int = 6, convexity: float = 0.1,
            max_iterations: int = 100, start=None,
-           alternatives: bool = True) -> InversionResult:
+           alternatives: bool = True, client=None) -> InversionResult:
     """Shape, pole and rotation state from lightcurves alone.
 
     Parameters
     ----------
-    observations : list of ObservedLightcurve
-        Lightcurves with their geometry (:func:`read_damit_lightcurves`).
+    observations : LightcurveObservations or list of them
+        Lightcurves with their geometry (:func:`read_damit_lightcurves`,
+        :func:`attitude.read_lightcurve` with ``geometry=``); each session of each is a
+        lightcurve of its own (a relative one: divided by its mean).
     rotation : {"auto", "principal", "tumbling"}
         The rotation fitted; ``"auto"`` is the principal-axis model; ``"tumbling"`` the
         non-principal-axis model of :mod:`attitude.inversion.tumbler`.
@@ -229,10 +264,13 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
         principal-axis rotator.
         Tumbling: optional, the two fundamental periods of the lightcurve (s; default
         from :func:`~attitude.photometry.fit_periods`) when there is no ``start``.
-    start : dict, TumblerFit or InversionResult, optional
+    start : dict, TumblerFit, InversionResult, (RigidBody, AttitudeState), optional
         Tumbling only: the starting state, the eight parameters of
-        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s) or an earlier fit;
-        without it the state is searched from the data alone
+        :data:`~attitude.inversion.tumbler.PARAMETERS` (SI: rad, s), an earlier fit, or a
+        body and a state (a tuple, or a scenario with ``.body`` and ``.state``: the state
+        in ECLIPJ2000 or an equatorial J2000 frame, at any epoch: it is propagated,
+        torque free, to the first data epoch); without it the state is searched from the
+        data alone
         (:func:`~attitude.inversion.tumbler.search_tumbler`, a minute or more).
     alternatives : bool
         Tumbling only: also fit the other mode (SAM/LAM, at the same period ratio) and the
@@ -244,6 +282,8 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     convexity : float
         Weight of the convexity term.
     max_iterations : int
+    client : dask.distributed.Client, optional
+        Run the period scan (a range given) on a dask cluster (:func:`period_scan`).
 
     Returns
     -------
@@ -252,7 +292,8 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     Raises
     ------
     PhotometryError
-        For an unknown rotation, a missing period, or too few points for the parameters.
+        For an unknown rotation, a missing period, fewer points than parameters (naming
+        the files), a single lightcurve shorter than the period asked (naming it).
 
     Examples
     --------
@@ -275,7 +316,13 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     if rotation not in ("auto", "principal", "tumbling"):
         raise PhotometryError(f"rotation {rotation!r} is unknown; use 'auto', 'principal' "
                               "or 'tumbling'", key="rotation")
-    observations = list(observations)
+    observations = engine_blocks(observations)
+    if rotation == "tumbling" and start is not None and not isinstance(
+            start, (dict, TumblerFit, InversionResult, np.ndarray)):
+        start = _parameters_of_state(start, observations)
+    _check_span(observations, period)
+    _check_enough_points(observations, GaussianImage(rows, degree).n_coefficients
+                         + (8 if rotation == "tumbling" else 3), rows, degree)
     if rotation == "tumbling":
         return _invert_tumbling(observations, start, period, rows=rows, degree=degree,
                                 convexity=convexity, max_iterations=max_iterations,
@@ -289,9 +336,11 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
         raise PhotometryError(f"{model.n_points} points for {n_parameters} parameters: "
                               "more data, or a lower degree", key="observations")
     p = np.atleast_1d(to_si(period, "s", name="period", error=PhotometryError))
+    scan = None
     if p.size == 2:
         span = float(np.ptp(model.time))
-        p0 = period_scan(observations, period_grid(span, *np.sort(p))).best
+        scan = period_scan(observations, period_grid(span, *np.sort(p)), client=client)
+        p0 = scan.best
     elif p.size == 1:
         p0 = float(p[0])
     else:
@@ -329,7 +378,39 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
                            pole=best.pole,
                            chi2=best.chi2, rms=best.rms, regime="PA-short",
                            alternatives=alternatives, dark_facet=best.dark_facet,
-                           spin_axis_tilt=tilt, fit=best)
+                           spin_axis_tilt=tilt, fit=best, scan=scan)
+
+
+def _files(observations) -> str:
+    """The distinct files (or names) of the lightcurves, for messages."""
+    names = list(dict.fromkeys(o.name.split(": ")[0] for o in observations))
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+def _check_enough_points(observations, n_parameters: int, rows: int, degree: int) -> None:
+    """More points than parameters (the shape's coefficients and the rotation's), or a
+    :class:`PhotometryError` naming the files."""
+    n = sum(len(o) for o in observations)
+    if n <= n_parameters:
+        raise PhotometryError(
+            f"{_files(observations)}: {n} points for {n_parameters} parameters (a shape of "
+            f"rows {rows}, degree {degree}, and the rotation): give more lightcurves, or "
+            "a lower degree", key="observations")
+
+
+def _check_span(observations, period) -> None:
+    """A single lightcurve must cover the longest period asked for, else a
+    :class:`PhotometryError` naming it."""
+    if len(observations) != 1 or period is None:
+        return
+    p = np.atleast_1d(to_si(period, "s", name="period", error=PhotometryError))
+    [obs] = observations
+    span = float(np.ptp(obs.time))
+    if span < p.max():
+        raise PhotometryError(
+            f"{obs.name}: a single lightcurve of {span / 3600:.4g} h cannot give a period "
+            f"of {p.max() / 3600:.4g} h (less than one rotation is seen): give more "
+            "sessions, or a shorter period", key="period")
 
 
 def _pole_distance(a: ConvexFit, b: ConvexFit) -> float:
@@ -339,6 +420,13 @@ def _pole_distance(a: ConvexFit, b: ConvexFit) -> float:
     v = [np.cos(b.latitude) * np.cos(b.longitude), np.cos(b.latitude) * np.sin(b.longitude),
          np.sin(b.latitude)]
     return float(np.arccos(np.clip(np.dot(u, v), -1.0, 1.0)))
+
+
+@lru_cache(maxsize=1)
+def _example_result() -> InversionResult:
+    """The inversion of :func:`_example_observations` (computed once, for the examples of
+    the figures)."""
+    return invert(_example_observations(), period=7200.0, poles=10, rows=4, degree=2)
 
 
 def _example_observations():
@@ -379,6 +467,52 @@ def _start_parameters(start) -> np.ndarray:
         raise PhotometryError(f"start: expected the 8 parameters {PARAMETERS}, got shape "
                               f"{p.shape}", key="start")
     return p
+
+
+#: Equatorial J2000 frames a start's state may be given in (turned to the ecliptic, the
+#: frame of the lightcurves' vectors; the ICRF's frame bias, 0.02 arcsec, is neglected
+#: in a start).
+_EQUATORIAL = ("ICRF", "GCRF", "EME2000", "J2000")
+
+
+def _parameters_of_state(start, observations) -> np.ndarray:
+    """The eight tumbler parameters at the first data epoch of a start given as a body and
+    a state: ``(RigidBody, AttitudeState)``, or any object with ``body`` and ``state``
+    (a scenario loaded by :func:`attitude.load_scenario`)."""
+    if isinstance(start, (tuple, list)) and len(start) == 2:
+        body, state = start
+    else:
+        body, state = getattr(start, "body", None), getattr(start, "state", None)
+    if not (isinstance(body, RigidBody) and isinstance(state, AttitudeState)):
+        raise PhotometryError("start: expected the eight parameters (a dict), a fit, or a "
+                              "body and a state ((RigidBody, AttitudeState) or a scenario "
+                              f"with .body and .state), got {type(start).__name__}",
+                              key="start")
+    frame = state.frame.upper()
+    attitude = state.attitude
+    if frame in _EQUATORIAL:
+        attitude = Rotation.from_rotvec([-OBLIQUITY_J2000, 0.0, 0.0]) * attitude
+    elif frame not in ("ECLIPJ2000", "ECLIPTIC_J2000"):
+        raise PhotometryError(f"start: the state's frame {state.frame} cannot be turned to "
+                              "the lightcurves' ecliptic J2000: give it in ECLIPJ2000 or an "
+                              "equatorial J2000 frame (ICRF, EME2000)", key="start.frame")
+    # the first data epoch: the tumbler's parameters are those of its state then
+    first = observations[0].epoch
+    t0 = min(float(o.time.min()) + float((o.epoch - first).to_value("s"))
+             for o in observations)
+    dt = float((first + TimeDelta(t0, format="sec") - state.epoch).to_value("s"))
+    moments = np.asarray(body.principal_moments, dtype=float)
+    b2p = body.body_to_principal
+    q, w = free_rotation(moments, (attitude * b2p.inv()).as_quat(),
+                         b2p.apply(state.omega_body), np.array([dt]))
+    moved = AttitudeState(state.epoch + TimeDelta(dt, format="sec"),
+                          Rotation.from_quat(q[0]) * b2p, b2p.inv().apply(w[0]),
+                          frame="ECLIPJ2000")
+    try:
+        params, _ = tumbling_parameters(body, moved)
+    except ValueError as err:
+        raise PhotometryError(f"start: {err}", key="start") from None
+    return np.array([params[k] for k in TUMBLING_PARAMETERS])
 
 
 def _other_mode(p: np.ndarray, regime: str):

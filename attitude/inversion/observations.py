@@ -1,11 +1,15 @@
 """Lightcurves with their viewing geometry: the input of an inversion.
 
 An inversion compares, point by point, an observed brightness with the brightness of a
-model seen from where the observer was, lit from where the Sun was.
-:class:`ObservedLightcurve` holds one lightcurve (one night, one session) with that
-geometry: the epochs at the body (light-time corrected), the brightness in intensity
-units, its uncertainty, and a :class:`~attitude.photometry.Geometry` with the directions
-from the body toward the Sun and toward the observer, one per point.
+model seen from where the observer was, lit from where the Sun was.  The data come as
+:class:`~attitude.photometry.observations.LightcurveObservations`, the one type of a
+lightcurve with its geometry (fitting reads it too): from :func:`read_damit_lightcurves`,
+or from :func:`attitude.read_lightcurve` with ``geometry=`` (ALCDEF, CSV).
+:class:`ObservedLightcurve` is the form the convex engine works in, one lightcurve (one
+night, one session) in intensity units at the epochs at the body (light-time
+corrected), with a :class:`~attitude.photometry.Geometry` of the directions from the
+body toward the Sun and toward the observer, one per point; :func:`engine_blocks`
+turns any observations into it.
 
 A lightcurve is *relative* (only the shape of the curve counts: each lightcurve is
 divided by its mean, model and data alike) or *calibrated* (the brightness reduced to
@@ -21,27 +25,34 @@ ecliptic (J2000) vectors to the Sun and to the Earth, au.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 
-import astropy.units as u
 import numpy as np
-from astropy.time import Time
+from astropy.time import Time, TimeDelta
 
 from attitude.foundations.constants import AU
 from attitude.foundations.errors import LightcurveFormatError, PhotometryError
 from attitude.photometry.geometry import Geometry
+from attitude.photometry.observations import MAGNITUDE_PER_LN, LightcurveObservations
 
-__all__ = ["ObservedLightcurve", "read_damit_lightcurves"]
+__all__ = ["LightcurveObservations", "ObservedLightcurve", "engine_blocks",
+           "read_damit_lightcurves"]
 
 #: The frame of DAMIT's vectors: ecliptic and mean equinox of J2000.
 DAMIT_FRAME = "ECLIPJ2000"
 
 
-@dataclass(frozen=True, eq=False)
-class ObservedLightcurve:
-    """One lightcurve and the geometry of each of its points.
+class ObservedLightcurve(LightcurveObservations):
+    """One lightcurve in intensities at the body's epochs: the convex engine's block.
+
+    A :class:`~attitude.photometry.observations.LightcurveObservations` (the one type of
+    a lightcurve with its geometry, which :func:`attitude.fitting.fit` reads too) built
+    from what an inversion works in: intensities and the epochs at the body.  Its
+    ``sigma`` is the uncertainty of the *intensity* (the unit of
+    :class:`~attitude.inversion.convex.ConvexModel`); ``magnitude_sigma`` that of the
+    magnitude, as for every observations object.  :func:`engine_blocks` turns any
+    observations into these blocks.
 
     Parameters
     ----------
@@ -62,6 +73,11 @@ class ObservedLightcurve:
     name : str
         Where the lightcurve came from (file and block), for messages.
 
+    Raises
+    ------
+    PhotometryError
+        On an empty, non-finite, non-positive or decreasing input, naming ``name``.
+
     Examples
     --------
     >>> import numpy as np
@@ -70,23 +86,18 @@ class ObservedLightcurve:
     >>> obs = ObservedLightcurve(Time("2026-01-01", scale="tdb"),
     ...                              np.arange(4) * 600.0, np.ones(4),
     ...                              Geometry(sun=[1, 0, 0], observer=[1, 0.1, 0]))
-    >>> len(obs), obs.calibrated
-    (4, False)
+    >>> len(obs), obs.calibrated, obs.magnitudes.tolist()
+    (4, False, [-0.0, -0.0, -0.0, -0.0])
+    >>> isinstance(obs, LightcurveObservations)
+    True
     """
 
-    epoch: Time
-    time: np.ndarray
-    brightness: np.ndarray
-    geometry: Geometry
-    sigma: np.ndarray | float = 1.0
-    calibrated: bool = False
-    name: str = "lightcurve"
-
-    def __post_init__(self):
-        t = np.array(self.time, dtype=float).ravel()
-        y = np.array(self.brightness, dtype=float).ravel()
-        s = np.broadcast_to(np.array(self.sigma, dtype=float), y.shape).copy()
-        where = self.name
+    def __init__(self, epoch: Time, time, brightness, geometry: Geometry,
+                 sigma=1.0, calibrated: bool = False, name: str = "lightcurve"):
+        t = np.array(time, dtype=float).ravel()
+        y = np.array(brightness, dtype=float).ravel()
+        s = np.broadcast_to(np.array(sigma, dtype=float), y.shape).copy()
+        where = name
         if t.shape != y.shape or t.size == 0:
             raise PhotometryError(f"{where}: time and brightness must be non-empty and of "
                                   f"one length, got {t.size} and {y.size}", key="brightness")
@@ -98,42 +109,89 @@ class ObservedLightcurve:
                                   "(intensity units, 10**(-0.4 mag))", key="brightness")
         if np.any(np.diff(t) < 0.0):
             raise PhotometryError(f"{where}: the times must not decrease", key="time")
-        n_geom = self.geometry.sun.shape[0] if self.geometry.sun.ndim == 2 else None
-        if n_geom is not None and n_geom != t.size:
-            raise PhotometryError(f"{where}: the geometry has {n_geom} directions for "
-                                  f"{t.size} points", key="geometry")
-        for name, value in (("time", t), ("brightness", y), ("sigma", s)):
+        if not isinstance(geometry, Geometry):
+            raise PhotometryError(f"{where}: expected an attitude.photometry.Geometry",
+                                  key="geometry")
+        if geometry.n_time not in (None, t.size):
+            raise PhotometryError(f"{where}: the geometry has {geometry.n_time} directions "
+                                  f"for {t.size} points", key="geometry")
+        epoch = Time(epoch).tdb
+        # the times at the observer: the body's plus the light time, when known
+        delay = 0.0 if geometry.light_time is None else geometry.light_time
+        super().__init__(epoch + TimeDelta(t + delay, format="sec"), -2.5 * np.log10(y),
+                         MAGNITUDE_PER_LN * s / y, geometry, epoch=epoch,
+                         calibrated=calibrated, name=name)
+        for key, value in (("_body_time", t), ("sigma", s), ("_brightness", y)):
             value.setflags(write=False)
-            object.__setattr__(self, name, value)
-        object.__setattr__(self, "calibrated", bool(self.calibrated))
-
-    def __len__(self) -> int:
-        return self.time.size
+            object.__setattr__(self, key, value)
 
     @property
-    def times(self) -> Time:
-        """The epochs of the points (at the body), as astropy times."""
-        return self.epoch + self.time * u.s
+    def time(self) -> np.ndarray:
+        """Seconds since ``epoch`` at the body, as given."""
+        return self._body_time
 
-    def sun_and_observer(self) -> tuple[np.ndarray, np.ndarray]:
-        """Unit vectors from the body toward the Sun and the observer, ``(n, 3)`` each.
+    @property
+    def brightness(self) -> np.ndarray:
+        """Intensities, as given."""
+        return self._brightness
 
-        Examples
-        --------
-        >>> import numpy as np
-        >>> from astropy.time import Time
-        >>> from attitude.photometry import Geometry
-        >>> obs = ObservedLightcurve(Time("2026-01-01", scale="tdb"), [0.0, 60.0],
-        ...                              [1.0, 1.1], Geometry(sun=[2, 0, 0],
-        ...                                                   observer=[0, 3, 0]))
-        >>> s, o = obs.sun_and_observer()
-        >>> s.tolist(), o.shape
-        ([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]], (2, 3))
-        """
-        n = len(self)
-        return (np.broadcast_to(self.geometry.sun, (n, 3)),
-                np.broadcast_to(self.geometry.observer, (n, 3)))
+    @property
+    def brightness_sigma(self) -> np.ndarray:
+        """Uncertainty of the intensities (``sigma``)."""
+        return self.sigma
 
+
+def engine_blocks(observations) -> list[ObservedLightcurve]:
+    """The convex engine's blocks of any observations: one per session, in intensities
+    at the body's epochs, all on the clock of the first one's epoch.
+
+    Parameters
+    ----------
+    observations : LightcurveObservations or list of them
+        From :func:`read_damit_lightcurves`, :func:`attitude.read_lightcurve` with
+        ``geometry=``, or built by hand (with an ``epoch`` or Time ``times``).
+
+    Returns
+    -------
+    list of ObservedLightcurve
+        The blocks (an ObservedLightcurve passes through).
+
+    Raises
+    ------
+    PhotometryError
+        On an empty list or an item that is not observations.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Geometry
+    >>> obs = LightcurveObservations(Time(["2026-01-01T00:00", "2026-01-01T01:00",
+    ...                                     "2026-01-02T00:00"], scale="tdb"),
+    ...                              [0.0, 0.1, 0.2], 0.01,
+    ...                              Geometry(sun=[1, 0, 0], observer=[1, 0.1, 0]),
+    ...                              sessions=[1, 1, 2])
+    >>> [(b.time.tolist(), b.brightness.round(4).tolist()) for b in engine_blocks(obs)]
+    [([0.0, 3600.0], [1.0, 0.9120]), ([86400.0], [0.8318])]
+    """
+    items = [observations] if isinstance(observations, LightcurveObservations) \
+        else list(observations)
+    if not items:
+        raise PhotometryError("no lightcurves to invert", key="observations")
+    blocks = []
+    for item in items:
+        if not isinstance(item, LightcurveObservations):
+            raise PhotometryError(f"expected lightcurve observations (read_damit_lightcurves,"
+                                  f" read_lightcurve with geometry=), got {type(item).__name__}",
+                                  key="observations")
+        if isinstance(item, ObservedLightcurve):
+            blocks.append(item)
+            continue
+        for part in item.split_sessions():
+            blocks.append(ObservedLightcurve(part.epoch, part.time, part.brightness,
+                                             part.geometry, sigma=part.brightness_sigma,
+                                             calibrated=part.calibrated, name=part.name))
+    return blocks
 
 
 def read_damit_lightcurves(path: str | PathLike, *, time_scale: str = "utc",

@@ -23,7 +23,16 @@ from .freebody import diagnose_many
 from .state import direction_frame, spin_axis_quaternion
 
 __all__ = ["MODELS", "DEFAULTS", "DIRECTION_SIGMA", "DIRECTION_PARAMETERS", "draw",
-           "tumbling_state", "spin_state", "invalid_where"]
+           "tumbling_state", "tumbling_parameters", "spin_state", "invalid_where"]
+
+#: The eight parameters of a tumbler as :func:`tumbling_parameters` returns them (the
+#: fits' names: ``phi0``, ``psi0`` are ``precession_angle``, ``rotation_angle``).
+TUMBLING_PARAMETERS = ("angular_momentum_ra", "angular_momentum_dec", "energy_ratio",
+                       "ratio_a", "ratio_b", "precession_period", "phi0", "psi0")
+# principal -> kernel frame of a LAM state (A along the kernel z), as in tumbling_state
+_LAM_KERNEL = Rotation.from_matrix([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+_HALF_TURNS = {"C": Rotation.from_rotvec([np.pi, 0.0, 0.0]),     # flips B and C
+               "A": Rotation.from_rotvec([0.0, 0.0, np.pi])}     # flips A and B
 
 #: Parameters of the sampling models (:meth:`Ensemble.sample`): name -> SI unit.
 #: ``"tumbling"``: a non-principal-axis rotator as light-curve inversions publish it
@@ -266,6 +275,76 @@ def tumbling_state(angular_momentum_ra, angular_momentum_dec, energy_ratio, rati
     m = np.where(ok[:, None], m, np.nan)
     omega = np.where(ok[:, None], omega, np.nan)
     return m, q, omega, dict(sorted(bad.items()))
+
+
+def tumbling_parameters(body, state) -> tuple[dict, Rotation]:
+    """The eight parameters of a torque-free state (the inverse of
+    :func:`tumbling_state`), and the body -> principal rotation they refer to.
+
+    The reference axis (C in SAM, A in LAM) is taken with a positive component of L: the
+    principal frame is turned by a half-turn about a principal axis when needed, and
+    the rotation returned includes that turn.
+
+    Parameters
+    ----------
+    body : RigidBody
+    state : AttitudeState
+        Its angles are those of the state's frame and epoch.
+
+    Returns
+    -------
+    dict, Rotation
+        The parameters (:data:`TUMBLING_PARAMETERS`, SI), and body -> principal.
+
+    Raises
+    ------
+    ValueError
+        For a state the parameterisation cannot hold: at rest, a principal-axis spin or
+        on the separatrix (no precession period), an axisymmetric body.
+
+    Examples
+    --------
+    >>> import attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> body = att.RigidBody.from_principal_moments([0.6, 0.9, 1.0])
+    >>> state = att.AttitudeState("2029-04-13", Rotation.from_rotvec([0.3, -0.2, 1.0]),
+    ...                           [0.05, 0.1, 1.0])
+    >>> p, _ = tumbling_parameters(body, state)
+    >>> round(p["energy_ratio"], 6), round(p["ratio_a"], 6)
+    (1.001487, 0.6)
+    """
+    moments = np.asarray(body.principal_moments, dtype=float)
+    A, B, C = moments
+    b2p = body.body_to_principal
+    w_p = b2p.apply(state.omega_body)
+    L_p = moments * w_p
+    L2 = float(L_p @ L_p)
+    if L2 == 0:
+        raise ValueError("a body at rest has no rotation parameters")
+    er = float(moments @ (w_p * w_p)) * C / L2
+    lam = er > C / B
+    axis = "A" if lam else "C"
+    if (L_p[0] if lam else L_p[2]) < 0:       # turn the principal frame by a half-turn
+        b2p = _HALF_TURNS[axis] * b2p
+        w_p = _HALF_TURNS[axis].apply(w_p)
+        L_p = moments * w_p
+    q_p2i = state.attitude * b2p.inv()
+    L_i = q_p2i.apply(L_p)
+    ra = float(np.arctan2(L_i[1], L_i[0]) % (2 * np.pi))
+    dec = float(np.arcsin(np.clip(L_i[2] / np.sqrt(L2), -1.0, 1.0)))
+    d = diagnose_many(moments[None], w_p[None])
+    pphi = float(d["precession"][0])
+    if not np.isfinite(pphi):
+        raise ValueError(f"the state ({d['regime'][0]}) has no precession period: the "
+                         "parameterisation needs a tumbling (SAM or LAM) triaxial state")
+    kernel = _LAM_KERNEL if lam else Rotation.identity()
+    r_l = Rotation.from_matrix(direction_frame(ra, dec))
+    euler = r_l.inv() * q_p2i * kernel.inv()
+    phi, _, psi = euler.as_euler("ZXZ")
+    params = dict(zip(TUMBLING_PARAMETERS, (ra, dec, float(er), float(A / C), float(B / C),
+                                            pphi, float(phi % (2 * np.pi)),
+                                            float(psi % (2 * np.pi)))))
+    return params, b2p
 
 
 def spin_state(spin_ra, spin_dec, spin_rate, ratio_a, ratio_b, rotation_angle=0.0,

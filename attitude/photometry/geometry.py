@@ -25,7 +25,7 @@ from attitude.foundations.constants import AU, OBLIQUITY_J2000, SPEED_OF_LIGHT
 from attitude.foundations.errors import PhotometryError
 from attitude.model.orbit import as_path
 
-__all__ = ["Geometry", "reduced_magnitude", "phase_angle", "AU", "SPEED_OF_LIGHT"]
+__all__ = ["Geometry", "OrbitGeometry", "reduced_magnitude", "phase_angle", "AU", "SPEED_OF_LIGHT"]
 
 _EQUATORIAL = {"ICRF", "GCRF", "EME2000", "J2000"}
 _ECLIPTIC = {"ECLIPJ2000", "ECLIPTIC_J2000"}
@@ -197,20 +197,53 @@ class Geometry:
         return (np.broadcast_to(self.sun, (n_time, 3)).copy(),
                 np.broadcast_to(self.observer, (n_time, 3)).copy())
 
+    def take(self, index) -> Geometry:
+        """The geometry of the epochs ``index`` (a constant geometry is kept as it is).
+
+        Examples
+        --------
+        >>> from attitude.photometry import Geometry
+        >>> g = Geometry(sun=[[1, 0, 0], [0, 1, 0], [0, 0, 1]], observer=[1, 1, 1])
+        >>> g.take([2]).sun.tolist(), g.take([2]).observer.tolist()
+        ([[0.0, 0.0, 1.0]], [0.5773502691896258, 0.5773502691896258, 0.5773502691896258])
+        """
+        n = self.n_time
+        if n is None:
+            return self
+        index = np.arange(n)[np.asarray(index)]
+
+        def pick(value, ndim=1):
+            if value is None:
+                return None
+            arr = np.asarray(value)
+            return arr[index] if arr.ndim == ndim and arr.shape[0] == n else arr
+
+        return Geometry(sun=pick(self.sun, 2), observer=pick(self.observer, 2),
+                        sun_distance=pick(self.sun_distance),
+                        observer_distance=pick(self.observer_distance),
+                        light_time=pick(self.light_time), frame=self.frame)
+
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def from_orbit(cls, orbit, times, observer="earth", *, epoch: Time | None = None,
-                   frame: str = "ECLIPJ2000", light_time: bool = True) -> Geometry:
+    def from_orbit(cls, orbit, times=None, observer="earth", *, epoch: Time | None = None,
+                   frame: str = "ECLIPJ2000", light_time: bool = True
+                   ) -> Geometry | OrbitGeometry:
         """Sun and observer directions from the target's heliocentric orbit.
+
+        Without ``times``, the recipe for the epochs of a file: an
+        :class:`OrbitGeometry`, which :func:`attitude.read_lightcurve` (``geometry=``)
+        evaluates at the file's epochs, taken as the observer's (reception) times.
 
         Parameters
         ----------
         orbit : KeplerOrbit or path
             The target's heliocentric orbit (``mu`` of the Sun), or any object with
             ``position(t)`` (m, heliocentric, inertial ``frame``).
-        times : array_like or astropy Time
+        times : array_like or astropy Time, optional
             Seconds since `epoch` at the body (emission times), or an astropy Time
-            array (then `epoch` defaults to its first element).
+            array (then `epoch` defaults to its first element).  None: return the
+            :class:`OrbitGeometry` recipe (then `epoch` is required: the epoch of the
+            orbit's ``t = 0``).
         observer : "earth", "sun" or path, optional
             The observer: ``"earth"`` (geocentre, astropy's built-in ephemeris), or an
             object with ``position(t)`` giving the observer's heliocentric position (m).
@@ -248,6 +281,8 @@ class Geometry:
         >>> geom.sun.shape, bool((geom.light_time > 0).all())
         ((2, 3), True)
         """
+        if times is None:
+            return OrbitGeometry(orbit, observer, epoch, frame, light_time)
         if isinstance(times, Time):
             epoch = times[0] if epoch is None and times.ndim else (epoch or times)
             times = np.atleast_1d((times - epoch).sec)
@@ -264,6 +299,103 @@ class Geometry:
                    sun_distance=np.linalg.norm(r_target, axis=1),
                    observer_distance=np.linalg.norm(delta, axis=1),
                    light_time=tau if light_time else None, frame=frame)
+
+
+@dataclass(frozen=True, eq=False)
+class OrbitGeometry:
+    """The geometry of a body on a heliocentric orbit, for epochs given later.
+
+    What :meth:`Geometry.from_orbit` returns without ``times``;
+    :func:`attitude.read_lightcurve` (``geometry=``) calls :meth:`at` with the epochs of
+    the file.
+
+    Parameters
+    ----------
+    orbit : KeplerOrbit or path
+        The target's heliocentric orbit (its ``t = 0`` is ``epoch``).
+    observer : "earth", "sun" or path
+        As in :meth:`Geometry.from_orbit`.
+    epoch : astropy Time
+        The epoch of the orbit's ``t = 0`` (the epoch of its mean anomaly); any scale,
+        used in TDB.
+    frame : str
+        The inertial frame of the orbit (default ``ECLIPJ2000``).
+    light_time : bool
+        Correct for the light time (default True).
+
+    Raises
+    ------
+    PhotometryError
+        Without an epoch (an astropy Time).
+
+    Examples
+    --------
+    >>> from astropy.time import Time
+    >>> from attitude.model.orbit import KeplerOrbit
+    >>> from attitude.photometry import Geometry
+    >>> orbit = KeplerOrbit.from_elements(mu="1.32712440018e20 m3/s2", a="2.2 AU", e=0.1,
+    ...                                   i="5 deg")
+    >>> recipe = Geometry.from_orbit(orbit, observer="earth",
+    ...                              epoch=Time("2026-01-01", scale="tdb"))
+    >>> geom = recipe.at(Time(["2026-01-10T00:00:00", "2026-01-10T06:00:00"], scale="utc"))
+    >>> geom.sun.shape, bool((geom.light_time > 0).all())
+    ((2, 3), True)
+    """
+
+    orbit: object
+    observer: object = "earth"
+    epoch: Time | None = None
+    frame: str = "ECLIPJ2000"
+    light_time: bool = True
+
+    def __post_init__(self):
+        if not isinstance(self.epoch, Time) or self.epoch.ndim:
+            raise PhotometryError("the orbit's geometry needs the epoch of its t = 0 (one "
+                                  "astropy Time, e.g. Time('2026-01-01', scale='tdb'))",
+                                  key="epoch")
+        object.__setattr__(self, "epoch", self.epoch.tdb)
+
+    def at(self, times: Time) -> Geometry:
+        """The geometry at the observer's epochs ``times`` (reception times).
+
+        The body is where the light that reaches the observer at ``times`` left it:
+        ``t_body = t - Delta/c``, with ``Delta`` the distance between the observer at
+        ``t`` and the body at ``t_body`` (solved by fixed-point iteration, a contraction
+        by ``|v|/c``).  The Sun is taken at the body's epoch (the Sun's own motion over a
+        light time is below the orbit's accuracy).
+
+        Parameters
+        ----------
+        times : astropy Time
+            The epochs at the observer, any scale (UTC for observed lightcurves).
+
+        Returns
+        -------
+        Geometry
+            Per epoch, with ``light_time`` (the body epochs are ``times - light_time``).
+
+        Raises
+        ------
+        PhotometryError
+            If ``times`` is not an astropy Time.
+        """
+        if not isinstance(times, Time):
+            raise PhotometryError("the epochs at the observer must be an astropy Time (a "
+                                  "scale explicit: UTC for observed lightcurves)", key="times")
+        t = np.atleast_1d((times.tdb - self.epoch).to_value(u.s))
+        target = as_path(self.orbit)
+        observe = _observer_path(self.observer, self.epoch, self.frame)
+        r_obs = observe(t)
+        tau = np.zeros_like(t)
+        for _ in range(4 if self.light_time else 1):   # contraction ~1e-4 per step
+            r_target = np.asarray(target.position(t - tau), dtype=float).reshape(len(t), 3)
+            delta = r_obs - r_target
+            if self.light_time:
+                tau = np.linalg.norm(delta, axis=1) / SPEED_OF_LIGHT
+        return Geometry(sun=-r_target, observer=delta,
+                        sun_distance=np.linalg.norm(r_target, axis=1),
+                        observer_distance=np.linalg.norm(delta, axis=1),
+                        light_time=tau if self.light_time else None, frame=self.frame)
 
 
 def _observer_path(observer, epoch, frame):

@@ -38,16 +38,19 @@ References
 from __future__ import annotations
 
 import csv
+import re
 import warnings
 from pathlib import Path
 
 import numpy as np
-from astropy.time import Time
+from astropy.time import Time, TimeDelta
 
 from attitude.foundations.errors import LightcurveFormatError
 from attitude.photometry.dataset import Lightcurve
+from attitude.photometry.geometry import Geometry, OrbitGeometry
+from attitude.photometry.observations import LightcurveObservations
 
-__all__ = ["read_lightcurve", "read_alcdef", "read_csv"]
+__all__ = ["read_lightcurve", "read_alcdef", "read_csv", "observations_of"]
 
 _DELIMITERS = {"PIPE": "|", "TAB": "\t"}
 #: Julian dates a lightcurve may hold: 1582-10-15 (the Gregorian calendar) to 3000-01-01;
@@ -57,7 +60,8 @@ _JD_OFFSET = {"jd": 0.0, "mjd": 2400000.5}
 _TRUE = {"TRUE", "T", "YES", "Y"}
 
 
-def read_lightcurve(path, *, format: str | None = None, **options) -> Lightcurve:
+def read_lightcurve(path, *, format: str | None = None, geometry=None, sigma=None,
+                    calibrated: bool = False, **options):
     """Read a lightcurve: ALCDEF, CSV or the package's own netCDF.
 
     Parameters
@@ -66,18 +70,37 @@ def read_lightcurve(path, *, format: str | None = None, **options) -> Lightcurve
     format : {"alcdef", "csv", "netcdf"}, optional
         Default: from the suffix (``.nc`` netCDF, ``.csv`` CSV) or the content (a
         ``STARTMETADATA`` line: ALCDEF).
+    geometry : OrbitGeometry, Geometry or callable, optional
+        The Sun and observer of every point: :meth:`Geometry.from_orbit` without times
+        (evaluated at the file's epochs, read as the observer's: an ALCDEF session
+        already light-time corrected gets its ``LTCDAYS`` back), a :class:`Geometry`
+        (constant, or one direction per point of the file), or a function of the
+        observer's epochs (astropy Time) returning a Geometry.  With it, the result
+        is a list of :class:`~attitude.photometry.observations.LightcurveObservations`,
+        one per session, for :func:`attitude.invert` or :func:`attitude.fitting.fit`.
+    sigma : float, optional
+        With ``geometry``: the 1-sigma (mag) of points the file gives none for.
+    calibrated : bool, optional
+        With ``geometry``: the magnitudes are reduced to unit distances and comparable
+        between sessions (default False: relative lightcurves).
     **options
         Passed to :func:`read_alcdef` or :func:`read_csv`.
 
     Returns
     -------
-    Lightcurve
-        ``time`` (s since ``lc.epoch``), ``magnitude``, ``magnitude_error``, ``session``.
+    Lightcurve, or list of LightcurveObservations
+        Without ``geometry``: ``time`` (s since ``lc.epoch``), ``magnitude``,
+        ``magnitude_error``, ``session``.  With it: one observations object per session,
+        named ``"<file>: session k (line j)"``, sharing one epoch (the file's first
+        point, TDB); their ``times`` are the observer's (UTC), their ``time`` the body's.
 
     Raises
     ------
     LightcurveFormatError
-        Unreadable or malformed file (the message names the line), or an unknown format.
+        Unreadable or malformed file (the message names the line), or an unknown format;
+        with ``geometry``: a point without an uncertainty (and no ``sigma``), a geometry
+        of another length than the file, a session corrected for light time whose
+        ``LTCDAYS`` is unknown.
 
     Examples
     --------
@@ -94,12 +117,19 @@ def read_lightcurve(path, *, format: str | None = None, **options) -> Lightcurve
     """
     path = Path(path)
     kind = (format or "").lower() or _sniff(path)
+    if geometry is not None and kind == "alcdef":
+        options = {"light_time": "observer"} | options
     if kind == "netcdf":
-        return Lightcurve.from_netcdf(path)
-    if kind == "csv":
-        return read_csv(path, **options)
-    if kind == "alcdef":
-        return read_alcdef(path, **options)
+        lc = Lightcurve.from_netcdf(path)
+    elif kind == "csv":
+        lc = read_csv(path, **options)
+    elif kind == "alcdef":
+        lc = read_alcdef(path, **options)
+    else:
+        lc = None
+    if lc is not None:
+        return lc if geometry is None else observations_of(
+            lc, geometry, path=path, sigma=sigma, calibrated=calibrated)
     raise LightcurveFormatError(f"unknown lightcurve format {format!r}: use 'alcdef', 'csv' "
                                 "or 'netcdf'", path=str(path))
 
@@ -133,9 +163,12 @@ def read_alcdef(path, *, reduce: bool = False, light_time: bool = True) -> Light
     path : str or path-like
     reduce : bool, optional
         Add ``UCORMAG`` to the magnitudes of sessions with ``REDUCEDMAGS=NONE``.
-    light_time : bool, optional
+    light_time : bool or "observer", optional
         Subtract ``LTCDAYS`` from the JDs of sessions with ``LTCAPP=NONE`` (times at
-        the asteroid).  Default True.
+        the asteroid).  Default True.  ``"observer"``: the times at the observer
+        instead (``LTCDAYS`` added back to sessions already corrected), for a
+        geometry that corrects the light time itself (:func:`read_lightcurve` with
+        ``geometry=``).
 
     Returns
     -------
@@ -213,7 +246,14 @@ def read_alcdef(path, *, reduce: bool = False, light_time: bool = True) -> Light
             ucor, ltc = _session_corrections(meta, lineno, fail)
             applied = meta.get("LTCAPP", "NONE").upper() not in ("NONE", "")
             shift = 0.0
-            if light_time and not applied:
+            if light_time == "observer":
+                if applied and ltc is None:
+                    raise fail(lineno, f"the session started on line {block_start} says "
+                                       f"LTCAPP={meta['LTCAPP']} without LTCDAYS: its times "
+                                       "at the observer cannot be recovered for the "
+                                       "geometry; give LTCDAYS (or LTCAPP=NONE)")
+                shift = -ltc if applied else 0.0
+            elif light_time and not applied:
                 if ltc is not None:
                     shift = ltc
                 else:
@@ -422,3 +462,92 @@ def _build(when, mag, err, session, *, title, source, attrs):
     return Lightcurve.from_arrays(time, magnitude=mag, magnitude_error=err,
                                   session=session, epoch=epoch, title=title, source=source,
                                   attrs=attrs)
+
+
+def observations_of(lc: Lightcurve, geometry, *, path=None, sigma=None,
+                    calibrated: bool = False) -> list[LightcurveObservations]:
+    """A read lightcurve with its geometry: one observations object per session.
+
+    Parameters
+    ----------
+    lc : Lightcurve
+        Observed magnitudes with ``magnitude_error`` and ``session`` (as read), the
+        times those of the observer.
+    geometry : OrbitGeometry, Geometry or callable
+        As in :func:`read_lightcurve`.
+    path : path, optional
+        The file, for the names and the errors.
+    sigma : float, optional
+        The 1-sigma (mag) of points without one.
+    calibrated : bool
+        Magnitudes reduced to unit distances (default False: relative).
+
+    Raises
+    ------
+    LightcurveFormatError
+        Naming the file and the session's line: a point without an uncertainty and no
+        ``sigma``, a geometry of another length than the file.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from astropy.time import Time
+    >>> from attitude.photometry import Geometry, Lightcurve
+    >>> lc = Lightcurve.from_arrays([0.0, 60.0, 86400.0], magnitude=[15.0, 15.1, 15.3],
+    ...                             magnitude_error=0.01, session=[0, 0, 1],
+    ...                             epoch=Time("2026-01-01", scale="utc"))
+    >>> obs = observations_of(lc, Geometry(sun=[1, 0, 0], observer=[1, 0.2, 0]))
+    >>> [len(o) for o in obs], obs[1].time.round(3).tolist()     # TDB seconds at the body
+    ([2, 1], [86400.0])
+    """
+    where = None if path is None else str(path)
+    label = Path(path).name if path is not None else "lightcurve"
+    ds = lc.dataset
+    n = len(lc)
+    times = lc.epoch + TimeDelta(lc.time, format="sec")
+    err = np.asarray(ds["magnitude_error"].values, dtype=float) \
+        if "magnitude_error" in ds else np.full(n, np.nan)
+    session = np.asarray(ds["session"].values) if "session" in ds else np.zeros(n, int)
+    lines = _session_lines(ds.attrs.get("sessions", ""))
+    missing = ~(np.isfinite(err) & (err > 0))
+    if missing.any():
+        if sigma is None:
+            k = session[np.flatnonzero(missing)[0]]
+            raise LightcurveFormatError(
+                f"{int(missing.sum())} point(s) without a magnitude uncertainty, the first "
+                f"in session {k}: give them one (MAGERR, a mag_err column) or sigma= (the "
+                "scenario's [inversion] sigma)", key=_where(k, lines), path=where)
+        err = np.where(missing, float(sigma), err)
+    if isinstance(geometry, OrbitGeometry):
+        geom = geometry.at(times)
+    elif isinstance(geometry, Geometry):
+        geom = geometry
+    elif callable(geometry):
+        geom = geometry(times)
+    else:
+        raise LightcurveFormatError(f"geometry must be Geometry.from_orbit(...), a Geometry "
+                                    f"or a function of the epochs, got {geometry!r}",
+                                    path=where, key="geometry")
+    if geom.n_time not in (None, n):
+        raise LightcurveFormatError(f"the geometry has {geom.n_time} directions for the "
+                                    f"file's {n} points: give one per point (or a "
+                                    "constant one)", path=where, key="geometry")
+    epoch = times[0].tdb
+    out = []
+    for k in np.unique(session):
+        pick = np.flatnonzero(session == k)
+        name = f"{label}: session {k}" + (f" (line {lines[k]})" if k in lines else "")
+        out.append(LightcurveObservations(times[pick], lc.magnitude[pick], err[pick],
+                                          geom.take(pick), epoch=epoch,
+                                          calibrated=calibrated, name=name))
+    return out
+
+
+def _session_lines(text: str) -> dict:
+    """``{session: line}`` from the ``sessions`` attribute of an ALCDEF read."""
+    return {int(k): int(line) for k, line in
+            re.findall(r"^session (\d+) \(line (\d+)\)", text, flags=re.MULTILINE)}
+
+
+def _where(k, lines) -> str:
+    return f"line {lines[k]}" if k in lines else f"session {k}"

@@ -21,6 +21,7 @@ from .common import (
     expectation_line,
     one_line,
 )
+from .invert import start_from_scenario
 
 #: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
 #: is the interface, tested in tests/app/test_cli.py).
@@ -77,7 +78,8 @@ def _run_one(path: str, out: dict) -> None:
         out["status"] = "skipped"
         return
     if is_inversion(document):           # issue 27: lightcurves in, shape and pole out
-        run = run_inversion(load_inversion(path), write_outputs=False)
+        run = run_inversion(load_inversion(path), write_outputs=False,
+                            load_start=start_from_scenario)
         out["name"], out["expect"] = run.name, [dict(e) for e in run.expect]
         return
     if is_binary(document):              # issue 28: the full two-body problem

@@ -6,7 +6,9 @@ import json
 from pathlib import Path
 
 from ...inversion.config import load_inversion, run_inversion
+from ...inversion.plot import pole_map, save_inversion_figures
 from ...model.ephemeris import write_atomically
+from ..scenario import load_scenario
 from .common import EXIT_EXPECTATION, EXIT_OK, expectation_line
 
 #: Nothing public: :func:`attitude.app.cli.main` runs ``command(args)`` (the command line
@@ -14,11 +16,23 @@ from .common import EXIT_EXPECTATION, EXIT_OK, expectation_line
 __all__ = []
 
 
+def start_from_scenario(path) -> tuple:
+    """``(body, state)`` of a scenario file, for ``[inversion] start_from``."""
+    scenario = load_scenario(path)
+    return scenario.body, scenario.state
+
+
 def command(args) -> int:
     """``attitude invert``."""
     scenario = load_inversion(args.scenario)
-    run = run_inversion(scenario, output=args.output)
+    run = run_inversion(scenario, output=args.output, load_start=start_from_scenario)
     res = run.result
+    if args.plot:                       # matplotlib: a missing one is bad input (exit 2)
+        stem = Path(str(run.outputs[0])[:-len("_shape.obj")])
+        cfg = scenario.inversion
+        grid = pole_map(run.observations, res, n_longitude=cfg["map_longitudes"],
+                        n_latitude=cfg["map_latitudes"])
+        run.outputs.extend(save_inversion_figures(run.observations, res, stem, pole=grid))
     if args.report:
         report = {"scenario": run.name, "regime": res.regime, "period": res.period,
                   "pole": list(res.pole), "rms": res.rms, "chi2": res.chi2,
