@@ -364,7 +364,7 @@ def integrate_reference_events(body: RigidBody, quat0, omega0, t, events, *,
     >>> q, w, rec = integrate_reference_events(body, [0, 0, 0, 1.0], [0.5, 0.1, 0.1],
     ...                                        np.linspace(0.0, 40.0, 5), [wide])
     >>> [(round(te, 6), i) for te, i, _, _ in rec]
-    [(2.010001, 0)]
+    [(2.010986, 0)]
     >>> bool(np.isnan(w[-1, 0]))                 # after the terminal event
     True
     """
