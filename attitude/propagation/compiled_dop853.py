@@ -1,4 +1,4 @@
-"""The reference integrator's DOP853 for one body, compiled with numba.
+"""The reference integrator's DOP853 for one body, compiled with numba, with events.
 
 The same method, step-size control and dense output as scipy's
 ``solve_ivp(method="DOP853", t_eval=...)`` (Hairer, Norsett & Wanner, *Solving Ordinary
@@ -22,6 +22,14 @@ scipy and against the exact torque-free solution).
 
 Every array is float64; the state is ``(q (4), omega (3))``, body -> inertial quaternion
 scalar-last, body-frame rates, as in :func:`attitude.propagation.reference.integrate_reference`.
+
+:func:`dop853_block` runs from a carried state (time, state, its derivative, the next
+step size, the event values) until a given time, so that a run in blocks (a progress
+bar's) takes the same steps as a run in one, and locates events: the built-in event
+functions (:data:`EVENT_KINDS`, each the formula of :mod:`attitude.propagation.events`
+compiled by ``jit_formula``) at each accepted step, a sign change bracketing a root on the
+step's interpolant, located by the Illinois variant of false position to
+:func:`root_tolerance`.  :func:`dop853_one` is one block from ``t = 0`` without events.
 """
 
 from __future__ import annotations
@@ -213,7 +221,14 @@ def _event_at(kind, params, inertia, F, y, t, h, tt, ys):
 def root_tolerance(a, b):
     """Half-width of the bracket :func:`_locate` ends with: ``4 eps max(|a|, |b|)``
     (a few ulps of the event time; the time it returns is within this of the root of the
-    event function on the interpolant, plus half an ulp for the midpoint's rounding)."""
+    event function on the interpolant, plus half an ulp for the midpoint's rounding).
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled_dop853 import root_tolerance
+    >>> root_tolerance(10.0, 12.0) == 48.0 * 2.0 ** -52
+    True
+    """
     return 4.0 * _EPS * max(abs(a), abs(b))
 
 
