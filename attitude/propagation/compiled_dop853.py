@@ -59,7 +59,7 @@ _EPS = float(np.finfo(float).eps)
 @jit
 def _rhs(torques, inertia, inv_inertia, t, y, work, out):
     """``out = dy/dt`` at ``(t, y)``; ``work`` (9,) scratch."""
-    ext, internal, has_internal = torques
+    ext, internal, has_internal, user, has_user = torques
     w0, w1, w2 = y[4], y[5], y[6]
     q = y[0:4]
     w = y[4:7]
@@ -69,6 +69,13 @@ def _rhs(torques, inertia, inv_inertia, t, y, work, out):
     L1 = inertia[1, 0] * w0 + inertia[1, 1] * w1 + inertia[1, 2] * w2
     L2 = inertia[2, 0] * w0 + inertia[2, 1] * w1 + inertia[2, 2] * w2
     body_torque(ext[0], ext[1], ext[2], t, q, w, m)
+    if has_user:
+        # the user's own compiled torque (compiled_torques.user_torque), by its address
+        mu = work[6:9]
+        user(t, q, w, mu)
+        m[0] += mu[0]
+        m[1] += mu[1]
+        m[2] += mu[2]
     d0 = (L1 * w2 - L2 * w1) + m[0]
     d1 = (L2 * w0 - L0 * w2) + m[1]
     d2 = (L0 * w1 - L1 * w0) + m[2]
@@ -336,7 +343,9 @@ def dop853_block(torques, inertia, inv_inertia, times, direction, t_bound, t_sto
     >>> times, out = np.array([np.pi / 2, np.pi]), np.empty((2, 7))
     >>> no_events = (np.zeros(0, np.int64), np.zeros((0, 4)), np.zeros(0), np.zeros(0))
     >>> rec, rec_y, n_rec = np.empty((0, 2)), np.empty((0, 7)), np.zeros(1, np.int64)
-    >>> args = ((none, none, False), inertia, np.linalg.inv(inertia), times, 1.0, np.pi)
+    >>> from attitude.propagation.compiled_torques import user_torque
+    >>> torques = (none, none, False, *user_torque(None))
+    >>> args = (torques, inertia, np.linalg.inv(inertia), times, 1.0, np.pi)
     >>> tail = (1e-12, np.full(7, 1e-15), cd.TABLEAU, carry, out, no_events, rec, rec_y,
     ...         n_rec)
     >>> cd.dop853_block(*args, 1.0, *tail), bool(carry[0] >= 1.0)  # a block to t = 1 s
@@ -499,9 +508,10 @@ def dop853_one(torques, inertia, inv_inertia, y0, times, direction, rtol, atol, 
     Parameters
     ----------
     torques : tuple
-        ``(external, internal, has_internal)``, each of the first two a
-        ``(kinds, offsets, params)`` triple of
-        :class:`~attitude.propagation.compiled_torques.CompiledTorques`.
+        ``(external, internal, has_internal, callback, has_user)``, each of the first two
+        a ``(kinds, offsets, params)`` triple of
+        :class:`~attitude.propagation.compiled_torques.CompiledTorques`, the last two
+        :func:`~attitude.propagation.compiled_torques.user_torque`'s.
     inertia, inv_inertia : (3, 3) float64 arrays
         Body-frame inertia tensor and its inverse.
     y0 : (7,) float64 array
@@ -528,11 +538,13 @@ def dop853_one(torques, inertia, inv_inertia, y0, times, direction, rtol, atol, 
     --------
     >>> import numpy as np
     >>> from attitude.propagation.compiled_dop853 import TABLEAU, dop853_one
+    >>> from attitude.propagation.compiled_torques import user_torque
     >>> none = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
     >>> inertia = np.diag([1.0, 2.0, 3.0])
     >>> y0 = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.5])      # a spin about z
     >>> out = np.empty((1, 7))
-    >>> dop853_one((none, none, False), inertia, np.linalg.inv(inertia), y0,
+    >>> torques = (none, none, False, *user_torque(None))       # no torque
+    >>> dop853_one(torques, inertia, np.linalg.inv(inertia), y0,
     ...            np.array([np.pi]), 1.0, 1e-12, np.full(7, 1e-15), TABLEAU, out)
     0
     >>> np.round(out[0, :4], 12) + 0.0                           # a quarter turn

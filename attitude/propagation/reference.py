@@ -32,7 +32,7 @@ from ..model.body import RigidBody
 from ..model.torques import internal_rate
 from . import compiled_dop853
 from .compiled import NUMBA, each_on_cores
-from .compiled_torques import compile_torques_shared
+from .compiled_torques import compile_torques_shared, user_torque
 from .events import compiled_events, evaluate
 
 __all__ = ["integrate_reference", "integrate_reference_batch", "checked_rtol", "DEFAULT_RTOL",
@@ -186,17 +186,25 @@ def _compiled_forms(bodies, torques, t: np.ndarray, method: str, compiled: bool 
                                     f"{method!r}", key="compiled")
         return None
     span = (float(min(0.0, np.min(t, initial=0.0))), float(max(0.0, np.max(t, initial=0.0))))
-    groups = [[m for m in torques if (getattr(m, "internal", False) is True) == internal]
+    # a user's torque with its own numba function (compiled_torques.user_torque), one
+    # external one at most, runs by its callback; the others by their compiled forms
+    user = [m for m in torques if getattr(m, "numba_torque", None) is not None
+            and getattr(m, "internal", False) is not True]
+    user = user if len(user) == 1 else []
+    rest = [m for m in torques if not any(m is u for u in user)]
+    groups = [[m for m in rest if (getattr(m, "internal", False) is True) == internal]
               for internal in (False, True)]
     shared = compile_torques_shared(groups, bodies, t_span=span)
     if shared is None:
         if compiled:
             raise InvalidStateError("compiled=True: a torque model has no compiled "
-                                    "form (a Python function or model); use "
+                                    "form (a Python function or model without a "
+                                    "numba_torque, or more than one with it); use "
                                     "compiled=None", key="compiled")
         return None
-    has_internal = any(getattr(m, "internal", False) is True for m in torques)
-    return [tuple((c.kinds, c.offsets, c.params) for c in row) + (has_internal,)
+    has_internal = any(getattr(m, "internal", False) is True for m in rest)
+    callback = user_torque(user[0] if user else None)
+    return [tuple((c.kinds, c.offsets, c.params) for c in row) + (has_internal, *callback)
             for row in shared]
 
 
