@@ -108,7 +108,7 @@ from .compiled import NUMBA, jit_formula
 from .compiled import jit as _jit
 
 __all__ = ["CompiledTorques", "compile_torques", "compile_torques_shared", "body_torque",
-           "NUMBA", "TERM_KINDS"]
+           "NUMBA", "TERM_KINDS", "user_torque"]
 
 #: Codes of the terms in ``kinds``.
 TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
@@ -715,3 +715,54 @@ def compile_torques_shared(groups, bodies, t_span=None
             compiled.append(CompiledTorques(kinds, offsets, params, names))
         out.append(compiled)
     return out
+
+
+# --- a user's own compiled torque (numba callback) --------------------------------------
+#: Compiled callbacks made so far, by the user's function (each compiled once).
+_CALLBACKS: dict = {}
+
+
+def _no_torque(t, q, omega, out):
+    """The callback of a run without a user torque (never called: ``has_user`` False)."""
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+
+
+def user_torque(model):
+    """The callback that the compiled DOP853 calls for ``model``'s ``numba_torque`` (or a
+    no-op one for ``model=None``): ``(callback, has_user)``.
+
+    The protocol: a torque model (any callable ``torque(t, quaternion, omega_body, body)``,
+    which the Python paths call) may carry a ``numba_torque`` attribute, an
+    ``@numba.njit`` function ``(t, q, omega, out) -> None`` that writes the same
+    body-frame torque (N m) into ``out`` (3,), from ``t`` (s since the epoch), ``q``
+    (4,), body -> inertial scalar-last as the integrator carries it (unit to the
+    tolerance), and ``omega`` (3,) body-frame rad/s.  Its body's numbers are its own
+    (globals or closure constants of the compiled function).  With numba the callback is
+    a ``numba.cfunc`` of that signature, which the kernel calls through its address: one
+    compiled kernel serves every user function.  Without numba (the kernels in plain
+    Python) it is the function itself.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.compiled_torques import user_torque
+    >>> callback, has_user = user_torque(None)
+    >>> has_user
+    False
+    """
+    function = _no_torque if model is None else model.numba_torque
+    known = _CALLBACKS.get(function)
+    if known is None:
+        known = function
+        if NUMBA:
+            import numba  # optional (the compiled paths): the callback's signature
+            from numba import types
+
+            sig = types.void(types.float64, types.float64[:], types.float64[:],
+                             types.float64[:])
+            # (the no-op is cached beside this file; a user's function has no such file)
+            known = numba.cfunc(sig, cache=function is _no_torque)(function)
+        _CALLBACKS[function] = known
+    return known, model is not None

@@ -32,7 +32,7 @@ from scipy.optimize import brentq
 from ..foundations.errors import InvalidStateError, PropagationError
 from ..foundations.quantities import to_si
 
-__all__ = ["Event", "nutation_crossing", "event_table"]
+__all__ = ["Event", "nutation_crossing", "nutation_angle", "event_table"]
 
 
 class Event:
@@ -121,15 +121,58 @@ def nutation_crossing(angle, axis="C", *, terminal: bool = True, direction: int 
 
     def nutation(t, quaternion, omega_body, body):
         if cache[0] is not body:
-            # principal axis k in body axes: row k of the body -> principal matrix
-            cache[:] = [body, body.inertia, body.body_to_principal.as_matrix()[k]]
+            cache[:] = [body, body.inertia, _principal_axis(body, k)]
         _, inertia, a = cache
-        L = np.einsum("ij,...j->...i", inertia, np.asarray(omega_body, dtype=float))
-        s = np.linalg.norm(np.cross(L, a), axis=-1)
-        return np.arctan2(s, L @ a) - value
+        w = np.asarray(omega_body, dtype=float)
+        return nutation_angle(inertia, a, w[..., 0], w[..., 1], w[..., 2]) - value
 
-    return Event(nutation, terminal=terminal, direction=direction,
-                 name=f"nutation_{'ABC'[k]}_{value:.9g}", vectorized=True)
+    event = Event(nutation, terminal=terminal, direction=direction,
+                  name=f"nutation_{'ABC'[k]}_{value:.9g}", vectorized=True)
+    # the compiled DOP853 evaluates the same formula (compiled_dop853.EVENT_KINDS)
+    event.compiled_form = lambda body: ("nutation", (value, *_principal_axis(body, k)))
+    return event
+
+
+def _principal_axis(body, k: int) -> np.ndarray:
+    """Principal axis ``k`` in body axes: row ``k`` of the body -> principal matrix."""
+    return np.ascontiguousarray(body.body_to_principal.as_matrix()[k], dtype=float)
+
+
+def nutation_angle(inertia, axis, w0, w1, w2):
+    """The angle between the angular momentum ``L = I omega`` and a body axis:
+    ``atan2(|L x a|, L . a)``, on floats or on arrays of rates alike (one formula for
+    the Python event of :func:`nutation_crossing` and for the compiled DOP853's).
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Body-frame inertia tensor.
+    axis : (3,) array
+        Unit axis ``a`` in body axes.
+    w0, w1, w2 : float or arrays
+        Body-frame rates, rad/s.
+
+    Returns
+    -------
+    float or array
+        The angle, rad, in ``[0, pi]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from attitude.propagation.events import nutation_angle
+    >>> inertia, c = np.diag([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 1.0])
+    >>> round(float(np.degrees(nutation_angle(inertia, c, 0.0, 1.5, 1.0))), 9)
+    45.0
+    """
+    L0 = inertia[0, 0] * w0 + inertia[0, 1] * w1 + inertia[0, 2] * w2
+    L1 = inertia[1, 0] * w0 + inertia[1, 1] * w1 + inertia[1, 2] * w2
+    L2 = inertia[2, 0] * w0 + inertia[2, 1] * w1 + inertia[2, 2] * w2
+    c0 = L1 * axis[2] - L2 * axis[1]
+    c1 = L2 * axis[0] - L0 * axis[2]
+    c2 = L0 * axis[1] - L1 * axis[0]
+    return np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2),
+                      L0 * axis[0] + L1 * axis[1] + L2 * axis[2])
 
 
 def event_table(ephemeris) -> list[tuple]:
@@ -253,3 +296,21 @@ def locate(events, tg, qg, wg, body, state_at) -> list[tuple]:
         if getattr(events[rec[1]], "terminal", False):
             break
     return out
+
+
+def compiled_events(events, body, kinds: dict):
+    """The ``events`` of :func:`attitude.propagation.compiled_dop853.dop853_block` for
+    one body, ``(kinds (E,), params (E, P), direction (E,), terminal (E,))``, or None when
+    an event has no compiled form (a Python function: scipy's path runs it).  ``kinds``
+    maps a form's name to its code (``compiled_dop853.EVENT_KINDS``)."""
+    forms = [getattr(ev, "compiled_form", None) for ev in events]
+    if not events or any(f is None for f in forms):
+        return None
+    rows = [f(body) for f in forms]
+    width = max(len(p) for _, p in rows)
+    params = np.zeros((len(rows), width))
+    for i, (_, p) in enumerate(rows):
+        params[i, :len(p)] = p
+    return (np.array([kinds[name] for name, _ in rows], dtype=np.int64), params,
+            np.array([float(getattr(ev, "direction", 0)) for ev in events]),
+            np.array([float(bool(getattr(ev, "terminal", False))) for ev in events]))

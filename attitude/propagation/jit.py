@@ -56,7 +56,8 @@ def _numba():
 #: callee would be loaded stale (and may crash): :func:`_drop_stale_cache` clears the
 #: cached code of all of them when any of them changes.
 KERNEL_MODULES = ("compiled.py", "compiled_torques.py", "compiled_loop.py",
-                  "compiled_dop853.py", "../model/orbit.py", "../model/shadow.py",
+                  "compiled_dop853.py", "events.py", "../model/orbit.py",
+                  "../model/shadow.py",
                   "../model/freebody_algebra.py", "../model/freebody_constants.py",
                   "../model/torques/common.py", "../model/torques/gravity_gradient.py",
                   "../model/torques/heavy_top.py", "../model/torques/eddy_current.py",

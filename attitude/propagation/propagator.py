@@ -122,8 +122,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         for the case, each set for the default accuracy, an attitude error of ~1e-8 rad
         over the run (:mod:`attitude.propagation.choice`: DOP853's ``rtol`` and the
         splitting's ``step`` from error models, the cheaper by a count of steps; without
-        numba, with a torque of your own, or with ``events``, the splitting at its step
-        rule).  The ephemeris attributes
+        numba, with a torque of your own, or with an event of your own (a Python
+        function), the splitting at its step rule).  The ephemeris attributes
         ``method`` and ``method_reason`` say which method ran and why.
     rtol : float, optional
         Relative tolerance: of the ``"integrator"`` method (default 1e-13), or, with
@@ -140,14 +140,16 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     order : {2, 4, 6}, optional
         Order of the ``"splitting"`` method (default 4).
     progress : bool
-        Progress bar for the ``"splitting"`` method (off by default).
+        Progress on stderr for the ``"splitting"`` and ``"integrator"`` methods (off by
+        default; :mod:`attitude.foundations.progress`).
 
     events : callable or sequence of callables, optional
         Events ``g(t, quaternion, omega_body, body) -> float`` with optional attributes
         ``terminal`` and ``direction`` like scipy's (:class:`attitude.propagation.events.Event`,
         :func:`attitude.propagation.events.nutation_crossing`).  Crossings are located to ~1e-12
-        relative in time on the method's own solution and recorded in the ephemeris
-        (``event_time``, ``event_name``, ``event_quaternion``,
+        relative in time on the method's own solution (``"integrator"``: compiled, on
+        DOP853's dense output, when every event is built in and numba is installed) and
+        recorded in the ephemeris (``event_time``, ``event_name``, ``event_quaternion``,
         ``event_angular_velocity``; :func:`attitude.propagation.events.event_table`); a terminal
         event ends the ephemeris, its last sample being the event; in a batch each
         body stops at its own event (its later samples are NaN).  Times must be >= 0.
@@ -166,7 +168,7 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
         chunk.  A single body (not a sequence) runs in this process: ``client`` and
         ``chunks`` are for batches.
 
-    ``step``, ``order`` and ``progress`` are used only by ``"splitting"``, ``rtol`` by
+    ``step`` and ``order`` are used only by ``"splitting"``, ``rtol`` by
     ``"integrator"`` and ``"splitting"``; the exact solution ignores them.  An ensemble, or a batch
     with ``client``/``chunks``, has a ``status`` variable per body (0 ok, 1 invalid
     input, 2 propagation failed; such bodies are NaN and do not stop the others).
@@ -211,16 +213,18 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
     t = elapsed_seconds(times, epoch)
     torques = list(torques or [])
     method, reason = _choose_method(method, torques, rtol, step, order)
-    if method == "auto" and events:
-        # DOP853 with events runs in scipy (not compiled): the splitting, as before
+    events = as_events(events)
+    if method == "auto" and any(getattr(e, "compiled_form", None) is None for e in events):
+        # an event in Python: DOP853 would run it in scipy (not compiled): the splitting
         method, reason = "splitting", ("events given: the splitting at its step rule "
-                                       "(DOP853's events run in scipy, not compiled)")
+                                       "(DOP853's events run in scipy, not compiled, "
+                                       "with an event in Python)")
     elif method == "auto":
+        # built-in events run on either compiled method: the cheaper, as without events
         choice = choose_method(bodies, q0, w0, t, torques)
         method, reason, rtol, step = choice.method, choice.reason, choice.rtol, choice.step
     if step is not None:
         step = _step_seconds(step)
-    events = as_events(events)
 
     records = None
     if events:
@@ -237,7 +241,8 @@ def propagate(body, state=None, times=None, *, torques: Sequence | None = None,
                                    rtol=rtol)
     else:
         kwargs = {} if rtol is None else {"rtol": rtol}
-        q, w = integrate_reference_batch(bodies, q0, w0, t, torques=torques, **kwargs)
+        q, w = integrate_reference_batch(bodies, q0, w0, t, torques=torques,
+                                         progress=progress, **kwargs)
     if not batch:
         q, w, bodies = q[0], w[0], bodies[0]
     name = bodies.name if isinstance(bodies, RigidBody) else "batch"
@@ -371,7 +376,8 @@ def _with_events(method, bodies, q0, w0, t, events, torques, step, order, rtol, 
     if method == "integrator":
         kwargs = {} if rtol is None else {"rtol": rtol}
         results = [integrate_reference_events(b, q0[i], w0[i], t, events, torques=torques,
-                                              **kwargs) for i, b in enumerate(bodies)]
+                                              progress=progress, **kwargs)
+                   for i, b in enumerate(bodies)]
         q = np.stack([r[0] for r in results])
         w = np.stack([r[1] for r in results])
         records = [r[2] for r in results]
