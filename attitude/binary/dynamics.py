@@ -25,7 +25,7 @@ from attitude.foundations import quaternion as quat
 from attitude.foundations.errors import PropagationError
 
 __all__ = ["derivatives", "integrate_dop853", "energy_momentum", "matrix", "pack", "unpack",
-           "mutual_forces"]
+           "mutual_forces", "system_scales", "tolerance_scale"]
 
 
 def matrix(q: np.ndarray) -> np.ndarray:
@@ -153,12 +153,50 @@ def energy_momentum(system: BinarySystem, y: np.ndarray) -> tuple[np.ndarray, np
     return E, L
 
 
-def _tolerance_scale(system: BinarySystem, y0: np.ndarray) -> np.ndarray:
-    """The scale of each state component (20,) that ``atol`` is a fraction of."""
-    R, V, _, w1, _, w2 = unpack(y0)
-    r = np.linalg.norm(R)
-    rate = np.sqrt(system.mu / r**3)            # the mutual orbit's own rate, rad/s
-    return np.concatenate([np.full(3, r), np.full(3, max(np.linalg.norm(V), rate * r)),
+def system_scales(system: BinarySystem, y0: np.ndarray) -> tuple[float, float, float]:
+    """The system's length, speed and rate scales at the state ``y0`` (20,): the
+    separation ``r0 = |R|``, the circular orbital speed there ``n r0`` and the mean
+    motion ``n = sqrt(mu / r0^3)`` (m, m/s, rad/s).
+
+    The one source of these scales: :func:`tolerance_scale` (DOP853's absolute
+    tolerance) and the metric of :mod:`attitude.binary.chaos` are built on them.
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e9, 50.0))
+    >>> system = att.BinarySystem(ball, ball)
+    >>> y0 = pack([500.0, 0, 0], [0, 0.01, 0], [0, 0, 0, 1.0], [0, 0, 0], [0, 0, 0, 1.0],
+    ...           [0, 0, 0])
+    >>> r0, v0, n = system_scales(system, y0)
+    >>> r0, bool(np.isclose(n, np.sqrt(system.mu / 500.0**3), rtol=1e-15)), v0 == n * r0
+    (500.0, True, True)
+    """
+    r0 = float(np.linalg.norm(np.asarray(y0, float)[:3]))
+    n = float(np.sqrt(system.mu / r0**3))
+    return r0, n * r0, n
+
+
+def tolerance_scale(system: BinarySystem, y0: np.ndarray) -> np.ndarray:
+    """The scale of each state component (20,) that DOP853's ``atol`` is a fraction of
+    (:func:`integrate_dop853`): the separation for ``R``, the orbital speed for ``V``, 1
+    for the quaternions, each body's fastest rate for its ``w``, the speed and rates never
+    below the system's own (:func:`system_scales`).
+
+    Examples
+    --------
+    >>> import numpy as np, attitude as att
+    >>> ball = att.RigidBody.from_mass_properties(att.MassProperties.solid_sphere(1e9, 50.0))
+    >>> system = att.BinarySystem(ball, ball)
+    >>> y0 = pack([500.0, 0, 0], [0, 0.01, 0], [0, 0, 0, 1.0], [0, 0, 1.0], [0, 0, 0, 1.0],
+    ...           [0, 0, 0])
+    >>> s = tolerance_scale(system, y0)
+    >>> s[:3].tolist(), s[10:13].tolist(), bool(s[17] == system_scales(system, y0)[2])
+    ([500.0, 500.0, 500.0], [1.0, 1.0, 1.0], True)
+    """
+    r, speed, rate = system_scales(system, y0)
+    _, V, _, w1, _, w2 = unpack(np.asarray(y0, float))
+    return np.concatenate([np.full(3, r), np.full(3, max(np.linalg.norm(V), speed)),
                            np.ones(4), np.full(3, max(np.abs(w1).max(), rate)), np.ones(4),
                            np.full(3, max(np.abs(w2).max(), rate))])
 
@@ -190,7 +228,7 @@ def integrate_dop853(system: BinarySystem, y0: np.ndarray, t: np.ndarray, *,
     """
     t = np.asarray(t, float)
     y0 = np.asarray(y0, float)
-    scale = _tolerance_scale(system, y0)
+    scale = tolerance_scale(system, y0)
     if t.size == 0:
         return np.empty((0, 20))
     if t[-1] == 0.0:

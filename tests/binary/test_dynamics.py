@@ -19,12 +19,12 @@ from scipy.spatial.transform import Rotation
 
 import attitude as att
 from attitude.binary.dynamics import (
-    _tolerance_scale,
     derivatives,
     energy_momentum,
     integrate_dop853,
     matrix,
     pack,
+    tolerance_scale,
     unpack,
 )
 from attitude.model.orbit import KeplerOrbit
@@ -42,7 +42,7 @@ def ellipsoid(mass, axes):
 def dop853_steps(system, y0, t_end, rtol) -> float:
     """Steps DOP853 takes on this problem with integrate_dop853's settings."""
     sol = solve_ivp(lambda _, y: derivatives(system, y), (0.0, t_end), y0, method="DOP853",
-                    rtol=rtol, atol=1e-12 * _tolerance_scale(system, y0))
+                    rtol=rtol, atol=1e-12 * tolerance_scale(system, y0))
     assert sol.success, sol.message
     return sol.nfev / 12
 
