@@ -86,3 +86,19 @@ def kepler_run(orbits, e, rtol):
 def test_two_spheres_keep_the_kepler_orbit_over_100_orbits():
     """Issue 28's number: e = 0.5, 100 orbits, within 1e-10 of the semi-major axis."""
     assert kepler_run(100, 0.5, 2.5e-14) <= 1e-10
+
+
+def test_rectifications_between_output_times():
+    """About an oblate primary the deviation from the Kepler orbit passes the
+    rectification threshold several times an orbit: with only the end asked for, the
+    segments in between yield no sample (it used to fail there), and the end is the one a
+    finely sampled run reaches (the segments and steps do not depend on the outputs; the
+    dense output against the step's end: a few ulps of the state)."""
+    primary = att.RigidBody.from_mass_properties(
+        att.MassProperties.solid_ellipsoid(5.2e11, [394.0, 394.0, 290.0]))
+    system = att.BinarySystem(primary, sphere(4.3e9, 80.0))
+    orbit = KeplerOrbit(system.mu, 1190.0, 0.05)
+    y0 = pack(*orbit.state(0.0), [0, 0, 0, 1.0], [0, 0, 0], [0, 0, 0, 1.0], [0, 0, 0])
+    end = integrate_dop853(system, y0, [0.0, orbit.period], rtol=1e-10)[-1]
+    fine = integrate_dop853(system, y0, np.linspace(0.0, orbit.period, 41), rtol=1e-10)[-1]
+    np.testing.assert_allclose(end[:3], fine[:3], rtol=0, atol=64 * EPS * orbit.apoapsis)
