@@ -11,8 +11,9 @@ taken in a scaled state space,
         + |\delta\theta_2|^2 + \frac{|\delta\omega_2|^2}{n^2},
 
 ``r_0`` the initial separation of the centres, ``n = sqrt(mu / r_0^3)`` the mean motion
-of the circular orbit there, ``delta theta_i`` the rotation vector (body frame, rad) from
-the reference attitude of body ``i`` to the displaced one.
+of the circular orbit there (both from :func:`attitude.binary.dynamics.system_scales`),
+``delta theta_i`` the rotation vector (body frame, rad) from the reference attitude of
+body ``i`` to the displaced one.
 
 The control (as in :mod:`attitude.analysis.lyapunov`) is the integrable motion of the
 same masses and state with both bodies made spheres (Keplerian orbit, free spins):
@@ -31,7 +32,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from attitude.analysis.lyapunov import batch_means_error
-from attitude.binary.dynamics import integrate_dop853, pack, unpack
+from attitude.binary.dynamics import integrate_dop853, pack, system_scales, unpack
 from attitude.binary.lgvi import default_step, integrate_lgvi
 from attitude.binary.propagate import initial_vector
 from attitude.binary.system import BinaryState, BinarySystem
@@ -115,13 +116,6 @@ def kepler_control(system: BinarySystem) -> BinarySystem:
     return BinarySystem(*bodies, order=2, G=system.G)
 
 
-def _scales(system: BinarySystem, y0: np.ndarray) -> tuple[float, float, float]:
-    """``r_0``, ``n r_0`` and ``n`` of the metric."""
-    r0 = float(np.linalg.norm(y0[:3]))
-    n = math.sqrt(system.mu / r0**3)
-    return r0, n * r0, n
-
-
 def _difference(y, yp, scales) -> np.ndarray:
     """The scaled displacement (18,) from ``y`` to ``yp``."""
     r0, v0, n = scales
@@ -146,7 +140,7 @@ def _displaced(y, delta, scales) -> np.ndarray:
 def _ftle(system, y0, knots, bounds, separation, method, step, rtol, seed):
     """Local exponents over the intervals ``knots[bounds[k]] .. knots[bounds[k+1]]``;
     each trajectory is propagated through every knot inside (the run's own grid)."""
-    scales = _scales(system, y0)
+    scales = system_scales(system, y0)
     rng = np.random.default_rng(seed)
     u = rng.normal(size=18)
     u *= separation / np.linalg.norm(u)

@@ -27,7 +27,17 @@ the attributes ``gravitational_constant`` and ``masses``):
 - **libration amplitude**: half the peak-to-peak of the unwrapped angle, if it does not
   circulate; **libration period**: twice the mean spacing of the zero crossings of the
   angle minus its mean, over an even number of half cycles (NaN with fewer than two
-  whole cycles).
+  whole cycles).  After an impulse (DART) that period mixes two motions: the libration
+  *forced* by the orbit's eccentricity, at the anomalistic orbital frequency, and the
+  *free* libration the impulse excited, at the secondary's own frequency.
+- **free libration** (:func:`free_libration`): the angle fitted by a constant and two
+  sinusoids, the forced one (its frequency started from the strongest line of the
+  separation ``|R|``: the anomalistic frequency) and the free one (started from the
+  strongest line of the angle away from the forced one), both frequencies refined by
+  least squares (the amplitudes solved linearly for each pair: variable projection).
+  NaN with fewer than two free cycles, the two lines closer than the run resolves
+  (``2 pi / span``), or a fit that leaves more than half the free line's amplitude
+  (root mean square): no free line stands out.
 - **secondary regime** (:func:`secondary_regime`), one of :data:`REGIMES`:
 
   * ``tumbling``: the secondary's body-frame angular velocity leaves the principal axis
@@ -58,6 +68,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from attitude.binary.chaos import lyapunov_exponent
 from attitude.binary.dynamics import matrix
@@ -67,7 +78,8 @@ from attitude.foundations.errors import BinarySystemError
 from attitude.model.body import RigidBody
 from attitude.model.ephemeris import Ephemeris
 
-__all__ = ["BinaryDiagnosis", "PeriodChange", "diagnose", "libration_angle", "orbit_period",
+__all__ = ["BinaryDiagnosis", "PeriodChange", "FreeLibration", "diagnose", "free_libration",
+           "libration_angle", "orbit_period",
            "osculating_period", "period_change", "secondary_regime", "REGIMES",
            "TUMBLING_ANGLE", "PRINCIPAL_ANGLE", "CIRCULAR_ECCENTRICITY"]
 
@@ -116,6 +128,9 @@ class BinaryDiagnosis:
         otherwise).
     lyapunov : BinaryLyapunov or None
         Its details (:func:`attitude.binary.chaos.lyapunov_exponent`).
+    free_libration_period : float
+        s, the free libration alone, the forced one fitted apart (:func:`free_libration`;
+        NaN: it circulates, or too short a run to separate them).
 
     Examples
     --------
@@ -140,6 +155,7 @@ class BinaryDiagnosis:
     conservation: dict
     lyapunov_exponent: float = math.nan
     lyapunov: object = None
+    free_libration_period: float = math.nan
 
     def periods(self) -> dict:
         """The periods of the report: ``orbit``, ``osculating``, ``libration``,
@@ -413,6 +429,146 @@ def _zero_crossing_period(t, x) -> float:
     return float(2 * (tc[-1] - tc[0]) / halves)
 
 
+@dataclass(frozen=True)
+class FreeLibration:
+    """The secondary's libration split into its free and forced parts
+    (:func:`free_libration`).
+
+    Attributes
+    ----------
+    period, amplitude : float
+        The free libration's period (s) and amplitude (rad).
+    forced_period, forced_amplitude : float
+        The forced libration's (the anomalistic orbital period, s; rad).
+    mean : float
+        rad, the constant of the fit.
+    residual : float
+        rad, the root mean square of what the fit leaves.
+
+    Examples
+    --------
+    >>> f = FreeLibration(55000.0, 0.02, 42900.0, 0.01, 0.0, 1e-5)
+    >>> round(f.period / 3600, 2)
+    15.28
+    """
+
+    period: float
+    amplitude: float
+    forced_period: float
+    forced_amplitude: float
+    mean: float
+    residual: float
+
+
+_NO_FREE_LIBRATION = FreeLibration(*[math.nan] * 6)
+
+
+def _strongest_line(t, x, exclude=None, width=0.0) -> float:
+    """Angular frequency of the strongest line of ``x(t)`` (uniform samples: the
+    Hann-windowed FFT, padded eight times; its peak on a parabola), leaving out the
+    frequencies within ``width`` of ``exclude``; NaN if none."""
+    h = (t[-1] - t[0]) / (t.size - 1)
+    size = 8 * t.size
+    power = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(t.size), size))
+    omega = 2 * math.pi * np.fft.rfftfreq(size, h)
+    power[0] = 0.0
+    if exclude is not None:
+        power[np.abs(omega - exclude) <= width] = 0.0
+    k = int(np.argmax(power))
+    if not power[k] > 0 or k == 0 or k == power.size - 1:
+        return math.nan
+    a, b, c = power[k - 1], power[k], power[k + 1]
+    shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c != 0 else 0.0
+    return float(omega[k] + shift * (omega[1] - omega[0]))
+
+
+def _two_lines(t, x, omegas):
+    """The least-squares amplitudes of ``c + sum_k a_k cos(w_k t) + b_k sin(w_k t)`` and
+    the residual, for the frequencies ``omegas``."""
+    columns = [np.ones_like(t)]
+    for w in omegas:
+        columns += [np.cos(w * t), np.sin(w * t)]
+    M = np.stack(columns, axis=1)
+    c = np.linalg.lstsq(M, x, rcond=None)[0]
+    return c, x - M @ c
+
+
+def _free_libration(t, R, phi) -> FreeLibration:
+    """:func:`free_libration` on arrays: the times, separations and unwrapped angle."""
+    span = float(t[-1] - t[0]) if t.size else 0.0
+    if t.size < 16 or not span > 0 or np.ptp(phi) >= math.pi:
+        return _NO_FREE_LIBRATION
+    tc = t - 0.5 * (t[0] + t[-1])
+    if not np.allclose(np.diff(t), span / (t.size - 1), rtol=1e-6, atol=0.0):
+        grid = np.linspace(t[0], t[-1], t.size)           # the lines' first guesses only
+        x, r = np.interp(grid, t, phi), np.interp(grid, t, np.linalg.norm(R, axis=-1))
+    else:
+        grid, x, r = t, phi, np.linalg.norm(R, axis=-1)
+    resolution = 2 * math.pi / span
+    forced = _strongest_line(grid, r)
+    free = _strongest_line(grid, x, exclude=forced, width=2 * resolution)
+    if not (math.isfinite(forced) and math.isfinite(free)):
+        return _NO_FREE_LIBRATION
+    scale = np.array([forced, free])
+    fit = least_squares(lambda u: _two_lines(tc, phi, u * scale)[1], np.ones(2),
+                        x_scale=resolution / scale, method="lm")
+    forced, free = fit.x * scale
+    if free * span < 4 * math.pi or abs(free - forced) < resolution:
+        return _NO_FREE_LIBRATION
+    c, rest = _two_lines(tc, phi, (forced, free))
+    if not np.sqrt(np.mean(rest**2)) < 0.5 * np.hypot(*c[3:5]):
+        return _NO_FREE_LIBRATION
+    return FreeLibration(period=2 * math.pi / abs(free), amplitude=float(np.hypot(*c[3:5])),
+                         forced_period=2 * math.pi / abs(forced),
+                         forced_amplitude=float(np.hypot(*c[1:3])), mean=float(c[0]),
+                         residual=float(np.sqrt(np.mean(rest**2))))
+
+
+def free_libration(eph, *, after: float | None = None) -> FreeLibration:
+    """The secondary's free libration, its forced libration fitted apart: the period and
+    amplitude of each (the rule of this module's documentation), over the samples at or
+    after ``after`` (s since the epoch: an impulse, DART), all of them by default.
+
+    The run must hold a few free cycles, and enough of them to tell the free frequency
+    from the orbit's: ``span > 2 pi / |w_free - w_orbit|``; otherwise every field is NaN.
+
+    Examples
+    --------
+    A Dimorphos-like ellipsoid locked to a spherical primary is kicked along its track,
+    1 % of its speed: the orbit turns eccentric (a forced libration at its frequency)
+    and the secondary swings at its own.
+
+    >>> import numpy as np, attitude as att
+    >>> from scipy.spatial.transform import Rotation
+    >>> ellipsoid = att.MassProperties.solid_ellipsoid
+    >>> system = att.BinarySystem(
+    ...     att.RigidBody.from_mass_properties(ellipsoid(5.2e11, [400.0, 400.0, 400.0])),
+    ...     att.RigidBody.from_mass_properties(ellipsoid(4.3e9, [103.0, 79.0, 66.0])))
+    >>> n = np.sqrt(system.mu / 1190.0**3)
+    >>> state = att.BinaryState("2026-12-01", [1190.0, 0, 0], [0, n * 1190.0, 0],
+    ...                         Rotation.identity(), [0, 0, 0], Rotation.identity(),
+    ...                         [0, 0, n])
+    >>> along = [-np.sin(n * 3600.0), np.cos(n * 3600.0), 0.0]     # the track an hour on
+    >>> kick = att.Impulse(3600.0, body="secondary",
+    ...                    delta_v=-0.01 * n * 1190.0 * np.array(along))
+    >>> eph = att.propagate(system, state, np.arange(0.0, 12 * 2 * np.pi / n, 900.0),
+    ...                     events=[kick])
+    >>> f = free_libration(eph, after=3600.0)
+    >>> A, B, C = system.secondary.principal_moments
+    >>> float(round(f.period * n * np.sqrt(3 * (B - A) / C) / (2 * np.pi), 2))  # formula's
+    1.01
+    """
+    ds = _binary_dataset(eph)
+    if after is not None:
+        t = np.asarray(ds["time"].values, dtype=float)
+        ds = ds.isel(time=np.nonzero(t >= float(after))[0])
+    t, R, V = _orbit_arrays(ds)
+    if t.size < 16:
+        return _NO_FREE_LIBRATION
+    phi, rate = _libration(ds)
+    return _free_libration(t, R, _unwrap(phi, rate, t, math.pi))
+
+
 def _angle_from(v, axis) -> np.ndarray:
     """Angle of each vector ``v`` (T, 3) from the line of ``axis`` (3,), rad."""
     c = np.abs(v @ axis) / np.linalg.norm(v, axis=-1)
@@ -639,6 +795,8 @@ def diagnose(eph, *, impulses=(), chaos: bool = False, system=None,
         conservation=conservation,
         lyapunov_exponent=math.nan if lyapunov is None else lyapunov.exponent,
         lyapunov=lyapunov,
+        free_libration_period=math.nan if circulates else _free_libration(
+            t, R, unwrapped).period,
     )
 
 
