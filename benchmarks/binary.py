@@ -27,8 +27,9 @@ The issue's longer figures, each kept in the same results file:
 
     python benchmarks/binary.py --only --kepler         # two spheres, 100 orbits, DOP853
     python benchmarks/binary.py --only --long 10000     # the LGVI over 1e4 orbits
-    python benchmarks/binary.py --only --variants 1000 --workers 2
-                                                        # post-impact Dimorphos variants
+    python benchmarks/binary.py --only --variants 1000 --workers 2 --numpy
+                                    # post-impact Dimorphos variants (compiled LGVI; one
+                                    # process, 2 dask workers, and the numpy path)
 
 Writes ``benchmarks/results/binary.json`` atomically.
 """
