@@ -28,8 +28,9 @@ The issue's longer figures, each kept in the same results file:
     python benchmarks/binary.py --only --kepler         # two spheres, 100 orbits, DOP853
     python benchmarks/binary.py --only --dart-libration # Dimorphos's free libration
     python benchmarks/binary.py --only --long 10000     # the LGVI over 1e4 orbits
-    python benchmarks/binary.py --only --variants 1000 --workers 2
-                                                        # post-impact Dimorphos variants
+    python benchmarks/binary.py --only --variants 1000 --workers 2 --numpy
+                                    # post-impact Dimorphos variants (compiled LGVI; one
+                                    # process, 2 dask workers, and the numpy path)
     python benchmarks/binary.py --only --flyby 100      # Apophis 2029 as an ensemble
     python benchmarks/binary.py --only --shapes         # does Dimorphos tumble, by a/b
 
@@ -304,49 +305,86 @@ def _variants(count: int, seed: int = 1):
     return systems, states
 
 
-def _run_variants(systems, states, times, step) -> list[str]:
-    """The members all at once (integrate_lgvi_batch), then each one's regime by
-    att.binary.diagnose: only the regimes travel back from a dask worker."""
+def _run_variants(systems, states, times, step, compiled=None) -> dict:
+    """The members all at once (integrate_lgvi_batch: each member's step loop compiled,
+    or with ``compiled=False`` the numpy path vectorised over them), then each one's
+    regime by att.binary.diagnose: only the regimes and this process's CPU times travel
+    back from a dask worker."""
     from attitude.binary.diagnostics import diagnose
     from attitude.binary.lgvi import integrate_lgvi_batch
     from attitude.binary.propagate import binary_ephemeris, initial_vector
 
+    t0, w0, c0 = time.process_time(), time.perf_counter(), time.thread_time()
     y0 = np.array([initial_vector(s) for s in states])
-    y = integrate_lgvi_batch(systems, y0, times, step)
-    return [diagnose(binary_ephemeris(s, st, times, yy, method="lgvi")).secondary_regime
-            for s, st, yy in zip(systems, states, y)]
+    y = integrate_lgvi_batch(systems, y0, times, step, compiled=compiled)
+    t1 = time.process_time()
+    regimes = [diagnose(binary_ephemeris(s, st, times, yy, method="lgvi")).secondary_regime
+               for s, st, yy in zip(systems, states, y)]
+    return {"regimes": regimes, "lgvi_cpu_s": t1 - t0,
+            "diagnose_cpu_s": time.process_time() - t1, "wall_s": time.perf_counter() - w0,
+            "thread_cpu_s": time.thread_time() - c0}
 
 
 def variants_run(count: int = 1000, days: float = 30.0, step: float = 60.0,
-                 workers: int = 0) -> dict:
-    """``count`` post-impact variants over ``days`` with the LGVI over all of them at once
-    (integrate_lgvi_batch), sampled every hour, each member's regime by
+                 workers: int = 0, numpy_path: bool = False) -> dict:
+    """``count`` post-impact variants over ``days`` with the LGVI (integrate_lgvi_batch,
+    each member's step loop compiled), sampled every hour, each member's regime by
     att.binary.diagnose; with ``workers``, the same members split over a dask
-    LocalCluster of that many single-threaded workers, and the scaling (the serial wall
-    time over ``workers`` times the parallel one)."""
+    LocalCluster of that many single-threaded workers, one chunk each, and the scaling
+    (the serial wall time over ``workers`` times the parallel one; and in CPU time, the
+    serial over ``workers`` times the slowest worker's).  Every process runs
+    two members first (numba loads its compiled code, or compiles it: not timed).  With
+    ``numpy_path``, the LGVI also on the numpy path (vectorised over the members) for
+    the speed-up.  The machine's load average is kept with the times: on a shared
+    machine the wall times (and so the scaling) carry the other work's share."""
     systems, states = _variants(count)
     times = np.arange(0.0, days * DAY + 1.0, 3600.0)
+    _run_variants(systems[:2], states[:2], times[:2], step)          # warm-up
+    load = os.getloadavg()[0]
     t0 = time.perf_counter()
-    regimes = _run_variants(systems, states, times, step)
-    serial = time.perf_counter() - t0
+    serial = _run_variants(systems, states, times, step)
+    wall = time.perf_counter() - t0
+    regimes = serial["regimes"]
     counts = {r: regimes.count(r) for r in sorted(set(regimes))}
-    out = {"members": count, "days": days, "step_s": step, "wall_s": serial,
+    out = {"members": count, "days": days, "step_s": step, "wall_s": wall,
+           "lgvi_cpu_s": serial["lgvi_cpu_s"], "diagnose_cpu_s": serial["diagnose_cpu_s"],
+           "load_average_at_start": load,
            "regime_fractions": {k: v / count for k, v in counts.items()}}
+    print(f"  serial: {out}", flush=True)
     if workers:
-        from dask.distributed import Client, LocalCluster
+        from attitude.propagation.cluster import local_cluster
 
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True) as c, \
-                Client(c) as client:
-            client.submit(_run_variants, systems[:2], states[:2], times[:2], step).result()
+        # the package's LocalCluster: worker processes without dask's malloc trimming
+        with local_cluster(workers) as client:
+            client.run(_run_variants, systems[:2], states[:2], times[:2], step)  # warm-up
             chunks = np.array_split(np.arange(count), workers)
+            load = os.getloadavg()[0]
             t0 = time.perf_counter()
             futures = [client.submit(_run_variants, [systems[i] for i in ix],
                                      [states[i] for i in ix], times, step) for ix in chunks]
             parts = client.gather(futures)
             parallel = time.perf_counter() - t0
         out.update(workers=workers, parallel_wall_s=parallel,
-                   scaling=serial / (workers * parallel),
-                   same_regimes_as_serial=[r for p in parts for r in p] == regimes)
+                   scaling=wall / (workers * parallel),
+                   # the same without the other work's share of a shared machine: the
+                   # serial CPU time over workers x the slowest worker's
+                   cpu_scaling=(serial["lgvi_cpu_s"] + serial["diagnose_cpu_s"]) / (
+                       workers * max(p["lgvi_cpu_s"] + p["diagnose_cpu_s"] for p in parts)),
+                   worker_cpu_s=[p["lgvi_cpu_s"] + p["diagnose_cpu_s"] for p in parts],
+                   worker_wall_s=[p["wall_s"] for p in parts],
+                   worker_thread_cpu_s=[p["thread_cpu_s"] for p in parts],
+                   # and the tasks' own threads only (not dask's in the same process)
+                   thread_cpu_scaling=serial["thread_cpu_s"] / (
+                       workers * max(p["thread_cpu_s"] for p in parts)),
+                   load_average_at_parallel_start=load,
+                   same_regimes_as_serial=[r for p in parts for r in p["regimes"]] == regimes)
+        print(f"  with {workers} workers: {out}", flush=True)
+    if numpy_path:
+        t0 = time.perf_counter()
+        plain = _run_variants(systems, states, times, step, compiled=False)
+        out.update(numpy_wall_s=time.perf_counter() - t0, numpy_lgvi_cpu_s=plain["lgvi_cpu_s"],
+                   lgvi_speedup_over_numpy=plain["lgvi_cpu_s"] / serial["lgvi_cpu_s"],
+                   numpy_same_regimes=plain["regimes"] == regimes)
     return out
 
 
@@ -482,6 +520,10 @@ def main(argv=None) -> None:
                     help="N Apophis flybys of 2029 over the uncertainty of its state")
     ap.add_argument("--shapes", action="store_true",
                     help="Dimorphos's regime a month after DART, shape by shape (a/b)")
+    ap.add_argument("--variant-days", type=float, default=30.0, metavar="DAYS",
+                    help="with --variants: the length of the run (default a month)")
+    ap.add_argument("--numpy", action="store_true",
+                    help="with --variants: also the numpy path, for the speed-up")
     ap.add_argument("--only", action="store_true",
                     help="run only the parts asked (--kepler, --long, --variants), not "
                          "the Didymos-like day; keep the other results in the file")
@@ -509,11 +551,16 @@ def main(argv=None) -> None:
                   f"{g['energy_trend_over_the_run']:.2e} against scatter "
                   f"{g['energy_scatter']:.2e}, CPU {g['cpu_s']:.0f} s")
         if args.variants:
-            v = result["variants"] = variants_run(args.variants, workers=args.workers)
+            v = result["variants"] = variants_run(args.variants, days=args.variant_days,
+                                                  workers=args.workers, numpy_path=args.numpy)
             print(f"{v['members']} post-impact variants over {v['days']:g} days: "
-                  f"{v['wall_s']:.0f} s; regimes {v['regime_fractions']}"
+                  f"{v['wall_s']:.0f} s (LGVI {v['lgvi_cpu_s']:.0f} s CPU); regimes "
+                  f"{v['regime_fractions']}"
+                  + (f"; numpy path LGVI {v['numpy_lgvi_cpu_s']:.0f} s CPU, "
+                     f"{v['lgvi_speedup_over_numpy']:.1f}x" if "numpy_wall_s" in v else "")
                   + (f"; {v['workers']} dask workers {v['parallel_wall_s']:.0f} s, scaling "
-                     f"{100 * v['scaling']:.0f} %" if "scaling" in v else ""))
+                     f"{100 * v['scaling']:.0f} % (in CPU time {100 * v['cpu_scaling']:.0f} "
+                     "%)" if "scaling" in v else ""))
         if args.flyby:
             f = result["apophis_flyby"] = flyby_run(args.flyby)
             print(f"Apophis 2029, {f['ran']} of {f['members']} members ({f['wall_s']:.0f} s): "

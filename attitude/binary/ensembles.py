@@ -247,8 +247,9 @@ def ensemble(members, times, *, method: str | None = None, rtol: float | None = 
         times the cost).
     client : None, "local", a dask ``Client`` or a scheduler address
         None: in this process, one member after another; otherwise one dask task per
-        chunk of ``chunk_size`` members (default: the members shared evenly, two chunks
-        per worker); ``"local"``: the session's LocalCluster
+        chunk of ``chunk_size`` members (default: the members shared evenly, one chunk
+        per worker: each chunk runs its families at once, and with the compiled LGVI a
+        chunk costs in proportion to its members); ``"local"``: the session's LocalCluster
         (:func:`attitude.propagation.cluster.shared_local_client`).
     chunk_size : int, optional
 
@@ -284,7 +285,7 @@ def ensemble(members, times, *, method: str | None = None, rtol: float | None = 
         client = _client(client)
         if chunk_size is None:
             workers = max(1, len(client.scheduler_info().get("workers", {})))
-            chunk_size = max(1, math.ceil(len(members) / (2 * workers)))
+            chunk_size = max(1, math.ceil(len(members) / workers))
         chunks = [members[i:i + int(chunk_size)]
                   for i in range(0, len(members), int(chunk_size))]
         futures = [client.submit(_run_chunk, c, times, options, pure=False) for c in chunks]

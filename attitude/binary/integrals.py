@@ -58,7 +58,7 @@ def position(k: int) -> dict:
 
 
 @cache
-def _tensor_maps(k: int) -> tuple[np.ndarray, np.ndarray]:
+def tensor_maps(k: int) -> tuple[np.ndarray, np.ndarray]:
     """For degree ``k``: the multi-index position of each of the ``3^k`` tensor entries,
     and the flat tensor entry that represents each multi-index."""
     pos = position(k)
@@ -271,7 +271,7 @@ def rotated(integrals: InertiaIntegrals, matrix: np.ndarray) -> InertiaIntegrals
         if k < 2:
             out.append(np.broadcast_to(t, batch + t.shape[-1:]).copy())
             continue
-        full, first = _tensor_maps(k)
+        full, first = tensor_maps(k)
         tensor = t[..., full]                                   # (..., 3^k), C order
         for _ in range(k):   # turn the first index and move it last: k passes, all turned
             tensor = np.einsum("...ij,...jr->...ri", matrix,

@@ -274,3 +274,45 @@ def _rotation_work(field: np.ndarray, integrals: np.ndarray, k: int) -> np.ndarr
     potential's derivative along the body's small rotation; ``U = -G sum(field T)``."""
     turned = np.einsum("iab,...b->...ia", generators(k), integrals)
     return np.einsum("...a,...ia->...i", field, turned)
+
+
+@cache
+def series_tables(order: int) -> dict:
+    """The series' tables flattened for compiled code (:mod:`attitude.binary.compiled`
+    consumes them rather than re-deriving the series): with ``n_k = (k+1)(k+2)/2`` and
+    ``offset[k]`` the start of degree ``k`` in a vector of all degrees 0..order+1,
+
+    - ``one``, ``two`` ``(3, offset[order + 2])``: the recurrence's positions of
+      ``gamma - e_i`` (in degree n-1) and ``gamma - 2 e_i`` (in degree n-2) at ``gamma``'s
+      slot (a missing one is ``n_{n-1}``, resp. ``n_{n-2}``);
+    - ``factorials``: ``gamma!`` at ``gamma``'s slot;
+    - per pair ``(k, l)`` of the series (``pair_k``, ``pair_l``, ``pair_start``): its
+      ``index`` and ``coef`` (``n_k x n_l`` from ``pair_start``) and ``force_index``
+      (``3 x n_k x n_l`` from ``3 pair_start``);
+    - ``generators`` of degree ``k >= 2``, ``3 x n_k x n_k`` from ``generator_start[k]``.
+    """
+    degrees = order + 2
+    sizes = [(k + 1) * (k + 2) // 2 for k in range(degrees + 1)]
+    offset = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    one = np.zeros((3, offset[degrees]), dtype=np.int64)
+    two = np.zeros_like(one)
+    factorials = np.empty(offset[degrees])
+    for n in range(degrees):
+        factorials[offset[n]:offset[n + 1]] = _factorials(n)
+        if n >= 1:
+            one[:, offset[n]:offset[n + 1]], two[:, offset[n]:offset[n + 1]] = _recurrence(n)
+    pairs = _pairs(order)
+    starts = np.concatenate([[0], np.cumsum([p.index.size for p in pairs])]).astype(np.int64)
+    gen_sizes = [3 * sizes[k] ** 2 if k >= 2 else 0 for k in range(order + 1)]
+    return {
+        "offset": offset, "one": one, "two": two, "factorials": factorials,
+        "pair_k": np.array([p.k for p in pairs], dtype=np.int64),
+        "pair_l": np.array([p.l for p in pairs], dtype=np.int64),
+        "pair_start": starts,
+        "index": np.concatenate([p.index.ravel() for p in pairs]).astype(np.int64),
+        "coef": np.concatenate([p.coef.ravel() for p in pairs]),
+        "force_index": np.concatenate([p.force_index.ravel() for p in pairs]).astype(np.int64),
+        "generator_start": np.concatenate([[0], np.cumsum(gen_sizes)]).astype(np.int64),
+        "generators": np.concatenate([np.zeros(0)] + [generators(k).ravel()
+                                                      for k in range(2, order + 1)]),
+    }

@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from attitude.binary.dynamics import energy_momentum, integrate_dop853, pack, unpack
-from attitude.binary.lgvi import default_step, integrate_lgvi, integrate_lgvi_batch
+from attitude.binary.lgvi import default_step, impulse_change, integrate_lgvi, integrate_lgvi_batch
 from attitude.binary.system import BODIES, BinaryState, BinarySystem, Impulse
 from attitude.foundations import quaternion as quat
 from attitude.foundations.errors import BinarySystemError
@@ -64,12 +64,11 @@ def apply_impulse(system: BinarySystem, y: np.ndarray, impulse: Impulse) -> np.n
     """
     y = np.array(y, dtype=float)
     R, V, q1, w1, q2, w2 = unpack(y)
-    sign = 1.0 if impulse.body == "secondary" else -1.0
-    V += sign * impulse.delta_v
-    q, w, body = (q2, w2, system.secondary) if impulse.body == "secondary" else \
-        (q1, w1, system.primary)
-    if np.any(impulse.angular_impulse):
-        dH_body = quat.rotate(q, impulse.angular_impulse, inverse=True)
+    dV, b, angular_impulse = impulse_change(impulse)     # the LGVI's kick, the same change
+    V += dV
+    q, w, body = (q2, w2, system.secondary) if b else (q1, w1, system.primary)
+    if np.any(angular_impulse):
+        dH_body = quat.rotate(q, angular_impulse, inverse=True)
         w += np.linalg.solve(body.inertia, dH_body)
     return y
 
