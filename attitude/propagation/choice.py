@@ -43,10 +43,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.body import as_bodies
 from ..model.torques import TorqueModel
 from .compiled import NUMBA
-from .kicks import System
-from .stepsize import STEPS_PER_PERIOD, torque_rates
+from .kicks import System, _terms
+from .stepsize import STEPS_PER_PERIOD, own_rates, torque_rates
 
 __all__ = []
 
@@ -66,6 +67,10 @@ SPLITTING_MAX_TURN = 1.0
 #: Cost of one compiled splitting step (order 4: six free flows and kicks) in compiled
 #: DOP853 steps, measured with gravity gradient (``benchmarks/spin_crossover.py``).
 SPLITTING_STEP_COST = 1.7
+#: Cost of measuring ``nu`` (a System, four free flows, one call of each torque model
+#: on five states, in numpy: ~0.5 ms) in compiled DOP853 steps (~10 us each with
+#: gravity gradient).
+NU_MEASURE_COST = 50.0
 
 
 @dataclass(frozen=True)
@@ -117,52 +122,79 @@ def splitting_step(h_rule: float, nu: float, accuracy: float = AUTO_ACCURACY) ->
     return h
 
 
+def _splitting_cost(t: np.ndarray, n: int, own, rate, nu, accuracy: float):
+    """``(step, cost)`` of the splitting at the step rule's ``rate`` (per body) and the
+    torque's turning ``nu`` (per body), for ``n`` bodies over the outputs ``t``."""
+    forward, backward = _spans(t)
+    top = float(np.max(rate, initial=0.0))
+    h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
+              if top > 0 and math.isfinite(top) else math.inf)
+    h = splitting_step(h_rule, float(np.max(nu, initial=0.0)), accuracy)
+    steps = (math.ceil(forward / h) + math.ceil(backward / h) if math.isfinite(h) else 1)
+    return h, n * SPLITTING_STEP_COST * (steps + _off_grid(t, h))
+
+
+def _measured_turning(body_list, q0, w0, torques):
+    """``(omega_M, nu, rate)`` per body (:func:`attitude.propagation.stepsize.torque_rates`:
+    ``nu`` measured along the free flow)."""
+    system = System(body_list, torques)
+    q_p, w_p = system.to_principal(q0, w0)
+    return torque_rates(system, q_p, w_p, 4, 0.0, True)
+
+
 def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torques,
                   accuracy: float = AUTO_ACCURACY) -> Choice:
     """The automatic method for bodies ``body_list`` at ``(q0 (N, 4), w0 (N, 3))``
     (body frames) over the outputs ``t`` (s from the state's time) under ``torques``."""
-    system = System(list(body_list), torques)
-    q_p, w_p = system.to_principal(np.asarray(q0, dtype=float), np.asarray(w0, dtype=float))
+    body_list = list(body_list)
+    n = len(body_list)
+    q0 = np.asarray(q0, dtype=float)
+    w0 = np.asarray(w0, dtype=float)
+    t = np.asarray(t, dtype=float)
+    terms = _terms(torques)
+    compiled = NUMBA and _compiled_form_expected(terms)
+    # the cheap part, without propagating: the spin (a norm: the same in body and
+    # principal axes), the torques' own rates, DOP853's cost and the splitting's at
+    # nu = 0, a lower bound (nu only shortens its step)
+    spin = np.sqrt(np.sum(w0 * w0, axis=1))
+    body_arg = body_list[0] if n == 1 else as_bodies(body_list)[0]
+    own = np.zeros(n)
+    for model in terms:
+        own = np.maximum(own, own_rates(model, body_arg, n, 0.0, q0, w0))
     forward, backward = _spans(t)
-    span = forward + backward
-    spin = np.sqrt(np.sum(w_p * w_p, axis=1))
-    compiled = NUMBA and _compiled_form_expected(system.terms)
-
-    def splitting_cost(variation: bool):
-        own, nu, rate = torque_rates(system, q_p, w_p, 4, 0.0, variation)
-        top = float(np.max(rate))
-        h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
-                  if top > 0 and math.isfinite(top) else math.inf)
-        h = splitting_step(h_rule, float(np.max(nu)), accuracy)
-        steps = (math.ceil(forward / h) + math.ceil(backward / h) if math.isfinite(h)
-                 else 1)
-        return own, h, system.n * SPLITTING_STEP_COST * (steps + _off_grid(t, h))
-
-    # the torques' own rates first (cheap): the splitting's cost at nu = 0 is a lower
-    # bound (nu only shortens its step); nu (free flows and torque calls) only when
-    # that bound does not settle it
-    own, step, cost_split = splitting_cost(False)
-    turns = (spin + own) * span / (2.0 * math.pi)
+    turns = (spin + own) * (forward + backward) / (2.0 * math.pi)
     rtol = dop853_rtol(turns, accuracy)
     steps_dop = DOP853_STEPS_PER_RADIAN * rtol ** -0.125 * 2.0 * math.pi * turns + 1.0
     outputs = np.unique(t).size
     cost_dop = float(np.sum(steps_dop + 0.25 * np.minimum(outputs, steps_dop)))
-    if not (compiled and cost_dop <= cost_split):
-        own, step, cost_split = splitting_cost(True)
+    step, cost_split = _splitting_cost(t, n, own, own, 0.0, accuracy)
+    pace = (f"spin {float(np.max(spin)):.3g} rad/s against the torque's pace "
+            f"{float(np.max(own)):.3g} rad/s")
+    dop853 = f"compiled DOP853 at rtol {rtol:.2g} (~{cost_dop:.3g} step-costs)"
 
+    if compiled and cost_dop <= cost_split + NU_MEASURE_COST:
+        # nu is not measured: the splitting cannot be cheaper, or not by more than
+        # measuring nu would cost
+        if cost_dop <= cost_split:
+            why = "is cheaper than"
+        else:
+            why = (f"is dearer by at most ~{cost_dop - cost_split:.3g}, less than measuring "
+                   f"the torque's turning costs (~{NU_MEASURE_COST:g}), than")
+        return Choice("integrator", f"{pace}: {dop853} {why} the splitting at step "
+                      f"{step:.3g} s or less (~{cost_split:.3g} or more) for "
+                      f"~{accuracy:g} rad", rtol=rtol, cost_integrator=cost_dop,
+                      cost_splitting=cost_split)
+    own, nu, rate = _measured_turning(body_list, q0, w0, torques)
+    step, cost_split = _splitting_cost(t, n, own, rate, nu, accuracy)
     if not compiled:
         why = ("numba is not installed" if not NUMBA
                else "a torque model has no compiled form")
         return Choice("splitting", f"{why}: the splitting (numpy path) at its step rule, "
                       "no compiled method to choose from", cost_integrator=cost_dop,
                       cost_splitting=cost_split)
-    pace = (f"spin {float(np.max(spin)):.3g} rad/s against the torque's pace "
-            f"{float(np.max(own)):.3g} rad/s")
     if cost_dop <= cost_split:
-        return Choice("integrator", f"{pace}: compiled DOP853 at rtol {rtol:.2g} "
-                      f"(~{cost_dop:.3g} step-costs) is cheaper than the splitting at "
-                      f"step {step:.3g} s or less (~{cost_split:.3g} or more) for "
-                      f"~{accuracy:g} rad",
+        return Choice("integrator", f"{pace}: {dop853} is cheaper than the splitting at "
+                      f"step {step:.3g} s (~{cost_split:.3g}) for ~{accuracy:g} rad",
                       rtol=rtol, cost_integrator=cost_dop, cost_splitting=cost_split)
     return Choice("splitting", f"{pace}: the compiled splitting at step {step:.3g} s "
                   f"(~{cost_split:.3g} step-costs) is cheaper than DOP853 at rtol "
