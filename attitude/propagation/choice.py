@@ -26,10 +26,17 @@ scipy's DOP853, which the compiled one reproduces), plus a quarter step for each
 holding an output (its three extra dense-output stages); a splitting step costs
 :data:`SPLITTING_STEP_COST` DOP853 steps and an output inside a step one more step (a
 partial step from the step's start).  The cheaper estimate wins; the run records which
-method ran and why (the ephemeris attributes ``method`` and ``method_reason``).  ``nu``
-costs a few free flows and torque calls (~1 ms in numpy): it is measured only when the
-splitting's cost at ``nu = 0`` (its lower bound) is below DOP853's.  An ensemble is
-judged on at most 4096 of its bodies, spread over it.
+method ran and why (the ephemeris attributes ``method`` and ``method_reason``).
+
+**The choice's own cost** stays small against the runs it chooses for (a compiled run of
+a few milliseconds, ``benchmarks/spin_crossover.py`` times it): the spin, the torques'
+own rates (``characteristic_rate``, closed forms of the models' parameters) and both
+cost estimates take no propagation; the splitting's cost at ``nu = 0`` is a lower bound
+(``nu`` only shortens its step).  ``nu`` is measured (a few free flows and one call of
+each torque model on five states, ~0.5 ms in numpy; :data:`NU_MEASURE_COST`) only when
+that bound is below DOP853's cost by more than the measurement costs: otherwise DOP853
+runs, and the most it can lose against the splitting is what measuring would have cost.
+An ensemble is judged on at most 4096 of its bodies, spread over it.
 
 Without numba, or with a torque model that has no compiled form, there is no compiled
 method to choose from: the splitting runs at its step rule, as before the choice existed
@@ -176,14 +183,15 @@ def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torq
         # nu is not measured: the splitting cannot be cheaper, or not by more than
         # measuring nu would cost
         if cost_dop <= cost_split:
-            why = "is cheaper than"
+            why = (f"is cheaper than the splitting at step {step:.3g} s or less "
+                   f"(~{cost_split:.3g} or more) for ~{accuracy:g} rad")
         else:
-            why = (f"is dearer by at most ~{cost_dop - cost_split:.3g}, less than measuring "
-                   f"the torque's turning costs (~{NU_MEASURE_COST:g}), than")
-        return Choice("integrator", f"{pace}: {dop853} {why} the splitting at step "
-                      f"{step:.3g} s or less (~{cost_split:.3g} or more) for "
-                      f"~{accuracy:g} rad", rtol=rtol, cost_integrator=cost_dop,
-                      cost_splitting=cost_split)
+            why = (f"for ~{accuracy:g} rad; the splitting (at step {step:.3g} s or less, "
+                   f"~{cost_split:.3g} or more) could save at most "
+                   f"~{cost_dop - cost_split:.3g}, less than measuring how fast the torque "
+                   f"turns along the free motion would cost (~{NU_MEASURE_COST:g})")
+        return Choice("integrator", f"{pace}: {dop853} {why}", rtol=rtol,
+                      cost_integrator=cost_dop, cost_splitting=cost_split)
     own, nu, rate = _measured_turning(body_list, q0, w0, torques)
     step, cost_split = _splitting_cost(t, n, own, rate, nu, accuracy)
     if not compiled:
