@@ -53,7 +53,7 @@ import numpy as np
 from ..model.body import as_bodies
 from ..model.torques import TorqueModel
 from .compiled import NUMBA
-from .kicks import System, _terms
+from .kicks import System, torque_terms
 from .stepsize import STEPS_PER_PERIOD, own_rates, torque_rates
 
 __all__ = []
@@ -158,7 +158,7 @@ def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torq
     q0 = np.asarray(q0, dtype=float)
     w0 = np.asarray(w0, dtype=float)
     t = np.asarray(t, dtype=float)
-    terms = _terms(torques)
+    terms = torque_terms(torques)
     compiled = NUMBA and _compiled_form_expected(terms)
     # the cheap part, without propagating: the spin (a norm: the same in body and
     # principal axes), the torques' own rates, DOP853's cost and the splitting's at
