@@ -75,8 +75,9 @@ SPLITTING_MAX_TURN = 1.0
 #: DOP853 steps, measured with gravity gradient (``benchmarks/spin_crossover.py``).
 SPLITTING_STEP_COST = 1.7
 #: Cost of measuring ``nu`` (a System, four free flows, one call of each torque model
-#: on five states, in numpy: ~0.5 ms) in compiled DOP853 steps (~10 us each with
-#: gravity gradient).
+#: on five states, in numpy: ~0.5 ms in a loop of its own, up to ~1.6 ms between
+#: propagations, ``benchmarks/spin_crossover.py``) in compiled DOP853 steps (~10 us
+#: each with gravity gradient): the lower figure, so that nu is measured when in doubt.
 NU_MEASURE_COST = 50.0
 
 
