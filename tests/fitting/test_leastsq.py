@@ -220,17 +220,23 @@ def test_a_fit_that_does_not_converge_says_so():
     assert_status_is_consistent(res)
 
 
-def test_a_fit_out_of_evaluations_continued_fits_the_data():
-    """The fit of test_a_fit_that_does_not_converge_says_so stopped after 2 evaluations,
-    continued from where it stopped (fit_to_its_end): it fits the data, its chi^2 within
-    the range of its distribution, like the uninterrupted fit's."""
-    rng = np.random.default_rng(9)
+def _noisy_sam(seed):
+    """``(rng, truth, observations)``: a random SAM state of BODY and 30 attitudes of it
+    over 20 s with 0.05 deg of Gaussian noise, from the seed."""
+    rng = np.random.default_rng(seed)
     truth = _state(rng, "SAM")
     t = np.linspace(0.0, 20.0, 30)
     sigma = np.radians(0.05)
     q = noisy_attitudes(att.propagate(BODY, truth, t).dataset["quaternion"].values,
                         sigma, rng)
-    obs = att.AttitudeObservations(t, q, sigma)
+    return rng, truth, att.AttitudeObservations(t, q, sigma)
+
+
+def test_a_fit_out_of_evaluations_continued_fits_the_data():
+    """The fit of test_a_fit_that_does_not_converge_says_so stopped after 2 evaluations,
+    continued from where it stopped (fit_to_its_end): it fits the data, its chi^2 within
+    the range of its distribution, like the uninterrupted fit's."""
+    rng, truth, obs = _noisy_sam(9)
     guess = perturbed_state(truth, rng, 0.2)
     stopped = att.fit(obs, BODY, guess, max_nfev=2, multistart=False)
     assert stopped.status == "max_nfev"
@@ -245,14 +251,8 @@ def test_out_of_evaluations_at_an_acceptable_chi2_says_so():
     evaluations: chi^2 is that of the truth, chi^2(n)-distributed, below the acceptable
     quantile of chi^2(dof) (by 1.6 sigma of the sum for this noise realisation; its
     value at the truth is seeded, so no CPU path changes it by more than round-off)."""
-    rng = np.random.default_rng(10)
-    truth = _state(rng, "SAM")
-    t = np.linspace(0.0, 20.0, 30)
-    sigma = np.radians(0.05)
-    q = noisy_attitudes(att.propagate(BODY, truth, t).dataset["quaternion"].values,
-                        sigma, rng)
-    res = att.fit(att.AttitudeObservations(t, q, sigma), BODY, truth, max_nfev=1,
-                  multistart=False)
+    _, truth, obs = _noisy_sam(10)
+    res = att.fit(obs, BODY, truth, max_nfev=1, multistart=False)
     assert res.status == "max_nfev at an acceptable chi2" and not res.success
     assert_status_is_consistent(res)
     assert f"for {res.dof} degrees of freedom" in res.message
