@@ -33,7 +33,7 @@ a few milliseconds, ``benchmarks/spin_crossover.py`` times it): the spin, the to
 own rates (``characteristic_rate``, closed forms of the models' parameters) and both
 cost estimates take no propagation; the splitting's cost at ``nu = 0`` is a lower bound
 (``nu`` only shortens its step).  ``nu`` is measured (a few free flows and one call of
-each torque model on five states, ~0.5 ms in numpy; :data:`NU_MEASURE_COST`) only when
+each torque model on five states, ~1 ms in numpy; :data:`NU_MEASURE_COST`) only when
 that bound is below DOP853's cost by more than the measurement costs: otherwise DOP853
 runs, and the most it can lose against the splitting is what measuring would have cost.
 An ensemble is judged on at most 4096 of its bodies, spread over it.
@@ -75,7 +75,7 @@ SPLITTING_MAX_TURN = 1.0
 #: DOP853 steps, measured with gravity gradient (``benchmarks/spin_crossover.py``).
 SPLITTING_STEP_COST = 1.7
 #: Cost of measuring ``nu`` (a System, four free flows, one call of each torque model
-#: on five states, in numpy: ~0.5 ms in a loop of its own, up to ~1.6 ms between
+#: on five states, in numpy: ~1 ms in a loop of its own, up to ~2 ms between
 #: propagations, ``benchmarks/spin_crossover.py``) in compiled DOP853 steps (~10 us
 #: each with gravity gradient): the lower figure, so that nu is measured when in doubt.
 NU_MEASURE_COST = 50.0
