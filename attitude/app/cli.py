@@ -409,12 +409,8 @@ def build_parser() -> argparse.ArgumentParser:
                       "period scan, the chi2 map over the pole and the shape as PNG (needs "
                       "matplotlib)")
     # --- pictures (issue 29) ---
-    anim = sub.add_parser("animate", help="a movie of an ephemeris (MP4 or GIF)",
-                          description=_ANIMATE_HELP,
-                          formatter_class=argparse.RawDescriptionHelpFormatter)
-    anim.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
-    anim.add_argument("-o", "--output", required=True, metavar="OUT.mp4|OUT.gif",
-                      help="the movie (.mp4 or .gif)")
+    anim = _picture_parser(sub, "animate", "a movie of an ephemeris (MP4 or GIF)",
+                           _ANIMATE_HELP, "OUT.mp4|OUT.gif", "the movie (.mp4 or .gif)")
     anim.add_argument("--fps", type=float, default=20.0, metavar="N",
                       help="frames per second (default 20)")
     anim.add_argument("--duration", type=float, default=None, metavar="S",
@@ -423,21 +419,25 @@ def build_parser() -> argparse.ArgumentParser:
                       help="leave out the panel of Poinsot's construction")
     anim.add_argument("--dpi", type=float, default=80.0, metavar="N",
                       help="pixels per inch of the 12 x 4.5 in frame (default 80)")
-    anim.add_argument("--body", type=int, default=None, metavar="I",
-                      help="the body of an ensemble file (default 0)")
-    anim.add_argument("--quiet", action="store_true", help="print nothing on success")
-    vw = sub.add_parser("view", help="an interactive 3D view of an ephemeris (one HTML "
-                        "file)", description=_VIEW_HELP,
-                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    vw.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
-    vw.add_argument("-o", "--output", required=True, metavar="OUT.html",
-                    help="the page (.html)")
+    vw = _picture_parser(sub, "view", "an interactive 3D view of an ephemeris (one HTML "
+                         "file)", _VIEW_HELP, "OUT.html", "the page (.html)")
     vw.add_argument("--frames", type=int, default=150, metavar="N",
                     help="steps of the time slider (default 150)")
-    vw.add_argument("--body", type=int, default=None, metavar="I",
-                    help="the body shown of an ensemble file (default 0)")
-    vw.add_argument("--quiet", action="store_true", help="print nothing on success")
     return parser
+
+
+def _picture_parser(sub, name: str, summary: str, description: str, output: str,
+                    output_help: str) -> argparse.ArgumentParser:
+    """The subparser of a picture of an ephemeris (``animate``, ``view``), with the
+    arguments they share: the ephemeris, ``-o`` (required), ``--body`` and ``--quiet``."""
+    p = sub.add_parser(name, help=summary, description=description,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("ephemeris", metavar="EPHEMERIS.nc", help="netCDF ephemeris")
+    p.add_argument("-o", "--output", required=True, metavar=output, help=output_help)
+    p.add_argument("--body", type=int, default=None, metavar="I",
+                   help="the body shown, of an ensemble file (default 0)")
+    p.add_argument("--quiet", action="store_true", help="print nothing on success")
+    return p
 
 
 def _file_of(args) -> str | None:

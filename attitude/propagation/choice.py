@@ -26,10 +26,17 @@ scipy's DOP853, which the compiled one reproduces), plus a quarter step for each
 holding an output (its three extra dense-output stages); a splitting step costs
 :data:`SPLITTING_STEP_COST` DOP853 steps and an output inside a step one more step (a
 partial step from the step's start).  The cheaper estimate wins; the run records which
-method ran and why (the ephemeris attributes ``method`` and ``method_reason``).  ``nu``
-costs a few free flows and torque calls (~1 ms in numpy): it is measured only when the
-splitting's cost at ``nu = 0`` (its lower bound) is below DOP853's.  An ensemble is
-judged on at most 4096 of its bodies, spread over it.
+method ran and why (the ephemeris attributes ``method`` and ``method_reason``).
+
+**The choice's own cost** stays small against the runs it chooses for (a compiled run of
+a few milliseconds, ``benchmarks/spin_crossover.py`` times it): the spin, the torques'
+own rates (``characteristic_rate``, closed forms of the models' parameters) and both
+cost estimates take no propagation; the splitting's cost at ``nu = 0`` is a lower bound
+(``nu`` only shortens its step).  ``nu`` is measured (a few free flows and one call of
+each torque model on five states, ~1 ms in numpy; :data:`NU_MEASURE_COST`) only when
+that bound is below DOP853's cost by more than the measurement costs: otherwise DOP853
+runs, and the most it can lose against the splitting is what measuring would have cost.
+An ensemble is judged on at most 4096 of its bodies, spread over it.
 
 Without numba, or with a torque model that has no compiled form, there is no compiled
 method to choose from: the splitting runs at its step rule, as before the choice existed
@@ -43,10 +50,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.body import as_bodies
 from ..model.torques import TorqueModel
 from .compiled import NUMBA
-from .kicks import System
-from .stepsize import STEPS_PER_PERIOD, torque_rates
+from .kicks import System, torque_terms
+from .stepsize import STEPS_PER_PERIOD, own_rates, torque_rates
 
 __all__ = []
 
@@ -66,6 +74,11 @@ SPLITTING_MAX_TURN = 1.0
 #: Cost of one compiled splitting step (order 4: six free flows and kicks) in compiled
 #: DOP853 steps, measured with gravity gradient (``benchmarks/spin_crossover.py``).
 SPLITTING_STEP_COST = 1.7
+#: Cost of measuring ``nu`` (a System, four free flows, one call of each torque model
+#: on five states, in numpy: ~1 ms in a loop of its own, up to ~2 ms between
+#: propagations, ``benchmarks/spin_crossover.py``) in compiled DOP853 steps (~10 us
+#: each with gravity gradient): the lower figure, so that nu is measured when in doubt.
+NU_MEASURE_COST = 50.0
 
 
 @dataclass(frozen=True)
@@ -90,7 +103,10 @@ def _compiled_form_expected(terms) -> bool:
 
 
 def _spans(t: np.ndarray) -> tuple[float, float]:
-    return float(max(0.0, np.max(t, initial=0.0))), float(-min(0.0, np.min(t, initial=0.0)))
+    """How far the outputs reach forward and backward of the state's time, s."""
+    if not t.size:
+        return 0.0, 0.0
+    return max(0.0, float(t.max())), -min(0.0, float(t.min()))
 
 
 def _off_grid(t: np.ndarray, h: float) -> int:
@@ -104,8 +120,8 @@ def _off_grid(t: np.ndarray, h: float) -> int:
 def dop853_rtol(turns: np.ndarray, accuracy: float = AUTO_ACCURACY) -> float:
     """DOP853's rtol for ``accuracy`` over ``turns`` (per body; the smallest)."""
     c, p = DOP853_ERROR
-    rtol = accuracy / (c * np.maximum(np.asarray(turns, dtype=float), 1.0) ** p)
-    return float(np.clip(np.min(rtol), *RTOL_RANGE))
+    most = max(float(np.max(turns)), 1.0)
+    return min(max(accuracy / (c * most ** p), RTOL_RANGE[0]), RTOL_RANGE[1])
 
 
 def splitting_step(h_rule: float, nu: float, accuracy: float = AUTO_ACCURACY) -> float:
@@ -117,52 +133,81 @@ def splitting_step(h_rule: float, nu: float, accuracy: float = AUTO_ACCURACY) ->
     return h
 
 
+def _splitting_cost(t: np.ndarray, n: int, own, rate, nu, accuracy: float):
+    """``(step, cost)`` of the splitting at the step rule's ``rate`` (per body) and the
+    torque's turning ``nu`` (per body), for ``n`` bodies over the outputs ``t``."""
+    forward, backward = _spans(t)
+    top = float(np.max(rate, initial=0.0))
+    h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
+              if top > 0 and math.isfinite(top) else math.inf)
+    h = splitting_step(h_rule, float(np.max(nu, initial=0.0)), accuracy)
+    steps = (math.ceil(forward / h) + math.ceil(backward / h) if math.isfinite(h) else 1)
+    return h, n * SPLITTING_STEP_COST * (steps + _off_grid(t, h))
+
+
+def _measured_turning(body_list, q0, w0, torques):
+    """``(omega_M, nu, rate)`` per body (:func:`attitude.propagation.stepsize.torque_rates`:
+    ``nu`` measured along the free flow)."""
+    system = System(body_list, torques)
+    q_p, w_p = system.to_principal(q0, w0)
+    return torque_rates(system, q_p, w_p, 4, 0.0, True)
+
+
 def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torques,
                   accuracy: float = AUTO_ACCURACY) -> Choice:
     """The automatic method for bodies ``body_list`` at ``(q0 (N, 4), w0 (N, 3))``
     (body frames) over the outputs ``t`` (s from the state's time) under ``torques``."""
-    system = System(list(body_list), torques)
-    q_p, w_p = system.to_principal(np.asarray(q0, dtype=float), np.asarray(w0, dtype=float))
+    body_list = list(body_list)
+    n = len(body_list)
+    q0 = np.asarray(q0, dtype=float)
+    w0 = np.asarray(w0, dtype=float)
+    t = np.asarray(t, dtype=float)
+    terms = torque_terms(torques)
+    compiled = NUMBA and _compiled_form_expected(terms)
+    # the cheap part, without propagating: the spin (a norm: the same in body and
+    # principal axes), the torques' own rates, DOP853's cost and the splitting's at
+    # nu = 0, a lower bound (nu only shortens its step)
+    spin = np.sqrt(np.sum(w0 * w0, axis=1))
+    body_arg = body_list[0] if n == 1 else as_bodies(body_list)[0]
+    own = np.zeros(n)
+    for model in terms:
+        own = np.maximum(own, own_rates(model, body_arg, n, 0.0, q0, w0))
     forward, backward = _spans(t)
-    span = forward + backward
-    spin = np.sqrt(np.sum(w_p * w_p, axis=1))
-    compiled = NUMBA and _compiled_form_expected(system.terms)
-
-    def splitting_cost(variation: bool):
-        own, nu, rate = torque_rates(system, q_p, w_p, 4, 0.0, variation)
-        top = float(np.max(rate))
-        h_rule = (2.0 * math.pi / (STEPS_PER_PERIOD[4] * top)
-                  if top > 0 and math.isfinite(top) else math.inf)
-        h = splitting_step(h_rule, float(np.max(nu)), accuracy)
-        steps = (math.ceil(forward / h) + math.ceil(backward / h) if math.isfinite(h)
-                 else 1)
-        return own, h, system.n * SPLITTING_STEP_COST * (steps + _off_grid(t, h))
-
-    # the torques' own rates first (cheap): the splitting's cost at nu = 0 is a lower
-    # bound (nu only shortens its step); nu (free flows and torque calls) only when
-    # that bound does not settle it
-    own, step, cost_split = splitting_cost(False)
-    turns = (spin + own) * span / (2.0 * math.pi)
+    turns = (spin + own) * (forward + backward) / (2.0 * math.pi)
     rtol = dop853_rtol(turns, accuracy)
     steps_dop = DOP853_STEPS_PER_RADIAN * rtol ** -0.125 * 2.0 * math.pi * turns + 1.0
-    outputs = np.unique(t).size
+    ordered = np.sort(t)                 # distinct outputs (np.unique costs more)
+    outputs = int(np.count_nonzero(ordered[1:] != ordered[:-1])) + 1 if t.size else 0
     cost_dop = float(np.sum(steps_dop + 0.25 * np.minimum(outputs, steps_dop)))
-    if not (compiled and cost_dop <= cost_split):
-        own, step, cost_split = splitting_cost(True)
+    step, cost_split = _splitting_cost(t, n, own, own, 0.0, accuracy)
+    pace = (f"spin {float(spin.max()):.3g} rad/s against the torque's pace "
+            f"{float(own.max()):.3g} rad/s")
+    dop853 = f"compiled DOP853 at rtol {rtol:.2g} (~{cost_dop:.3g} step-costs)"
 
+    if compiled and cost_dop <= cost_split + NU_MEASURE_COST:
+        # nu is not measured: the splitting cannot be cheaper, or not by more than
+        # measuring nu would cost
+        if cost_dop <= cost_split:
+            why = (f"is cheaper than the splitting at step {step:.3g} s or less "
+                   f"(~{cost_split:.3g} or more) for ~{accuracy:g} rad")
+        else:
+            why = (f"for ~{accuracy:g} rad; the splitting (at step {step:.3g} s or less, "
+                   f"~{cost_split:.3g} or more) could save at most "
+                   f"~{cost_dop - cost_split:.3g}, less than measuring how fast the torque "
+                   f"turns along the free motion would cost (~{NU_MEASURE_COST:g})")
+        return Choice("integrator", f"{pace}: {dop853} {why}", rtol=rtol,
+                      cost_integrator=cost_dop, cost_splitting=cost_split)
+    own, nu, rate = _measured_turning(body_list, q0, w0, torques)
+    step, cost_split = _splitting_cost(t, n, own, rate, nu, accuracy)
     if not compiled:
         why = ("numba is not installed" if not NUMBA
                else "a torque model has no compiled form")
         return Choice("splitting", f"{why}: the splitting (numpy path) at its step rule, "
                       "no compiled method to choose from", cost_integrator=cost_dop,
                       cost_splitting=cost_split)
-    pace = (f"spin {float(np.max(spin)):.3g} rad/s against the torque's pace "
-            f"{float(np.max(own)):.3g} rad/s")
     if cost_dop <= cost_split:
-        return Choice("integrator", f"{pace}: compiled DOP853 at rtol {rtol:.2g} "
-                      f"(~{cost_dop:.3g} step-costs) is cheaper than the splitting at "
-                      f"step {step:.3g} s or less (~{cost_split:.3g} or more) for "
-                      f"~{accuracy:g} rad",
+        return Choice("integrator", f"{pace}: {dop853} is cheaper than the splitting at "
+                      f"step {step:.3g} s (~{cost_split:.3g}) for ~{accuracy:g} rad",
                       rtol=rtol, cost_integrator=cost_dop, cost_splitting=cost_split)
     return Choice("splitting", f"{pace}: the compiled splitting at step {step:.3g} s "
                   f"(~{cost_split:.3g} step-costs) is cheaper than DOP853 at rtol "

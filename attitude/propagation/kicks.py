@@ -24,7 +24,7 @@ def qmul_unit(q, g):
     r = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
     return (nx * r, ny * r, nz * r, nw * r)
 
-def _terms(torques) -> list:
+def torque_terms(torques) -> list:
     """Flatten torque models (sums included) into their terms."""
     if torques is None:
         return []
@@ -36,7 +36,7 @@ def _terms(torques) -> list:
             raise InvalidStateError(f"torques: expected callables torque(t, quaternion, "
                                     f"omega_body, body), got {type(model).__name__}")
         sub = getattr(model, "terms", None)
-        out.extend(_terms(list(sub)) if isinstance(sub, tuple) else [model])
+        out.extend(torque_terms(list(sub)) if isinstance(sub, tuple) else [model])
     return out
 
 
@@ -60,7 +60,7 @@ class System:
         self.n = len(bodies)
         batch, _ = as_bodies(bodies)
         self.body_arg = bodies[0] if self.n == 1 else batch
-        terms = _terms(torques)
+        terms = torque_terms(torques)
         self.terms = terms
         self.internal_terms = [m for m in terms if _is_internal(m)]
         self.kick_terms = [m for m in terms if _is_conservative(m) and not _is_internal(m)]

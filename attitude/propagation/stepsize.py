@@ -11,7 +11,7 @@ import numpy as np
 
 from ..foundations import quaternion as quat
 from ..model.body import as_bodies
-from ..model.torques import as_torque_model
+from ..model.torques import TorqueModel, as_torque_model
 from .freeflow import free_flow_batch
 from .kicks import System
 
@@ -23,15 +23,39 @@ __all__ = ["choose_step", "STEPS_PER_PERIOD"]
 STEPS_PER_PERIOD = {2: 1000, 4: 300, 6: 200}
 
 
-def _own_rates(model, system: System, t0: float, q_p, w_p) -> np.ndarray:
-    """The model's own rate (``TorqueModel.characteristic_rate``), rad/s, per body."""
-    q_b, w_b = system.to_body(q_p, w_p)
+def own_rates(model, body_arg, n: int, t0: float, q_b, w_b) -> np.ndarray:
+    """The model's own rate (``TorqueModel.characteristic_rate``), rad/s, per body, at
+    body-frame states ``q_b (n, 4)``, ``w_b (n, 3)`` (``body_arg``: the one body, or
+    the batch)."""
     model = as_torque_model(model)
-    if system.n == 1:
-        rate = model.characteristic_rate(t0, q_b[0], w_b[0], system.body_arg)
+    if n == 1:
+        rate = model.characteristic_rate(t0, q_b[0], w_b[0], body_arg)
     else:
-        rate = model.characteristic_rate(t0, q_b, w_b, system.body_arg)
-    return np.broadcast_to(np.asarray(rate, dtype=float), (system.n,))
+        rate = model.characteristic_rate(t0, q_b, w_b, body_arg)
+    return np.broadcast_to(np.asarray(rate, dtype=float), (n,))
+
+
+def _own_rates(model, system: System, t0: float, q_p, w_p) -> np.ndarray:
+    """:func:`own_rates` at principal-frame states."""
+    q_b, w_b = system.to_body(q_p, w_p)
+    return own_rates(model, system.body_arg, system.n, t0, q_b, w_b)
+
+
+def _inertial_torques(model, system: System, t0: float, q_p, w_p) -> np.ndarray:
+    """The model's torque in inertial axes, N m, at principal-frame states ``q_p
+    (K, n, 4)``, ``w_p (K, n, 3)``: for one body, a :class:`TorqueModel` (whose
+    ``evaluate`` broadcasts over leading axes) is called once on the ``K`` states;
+    otherwise once per state, as the integrator calls it."""
+    k = q_p.shape[0]
+    if system.n == 1 and isinstance(model, TorqueModel):
+        q_b, w_b = system.to_body(q_p[:, 0], w_p[:, 0])
+        m = model(t0, q_b, w_b, system.body_arg)
+        if m.shape == (k, 3):
+            if not system.identity:
+                m = quat.rotate(system.q_bp, m)
+            return quat.rotate(q_p[:, 0], m)[:, None, :]
+    return np.stack([quat.rotate(q_p[j], system._torque([model], t0, q_p[j], w_p[j])
+                                 * system.moments) for j in range(k)])
 
 
 def _variation_rates(model, system: System, t0: float, q_p, w_p, order: int
@@ -46,14 +70,12 @@ def _variation_rates(model, system: System, t0: float, q_p, w_p, order: int
     spin = np.sqrt(np.sum(w_p * w_p, axis=1))
     moving = spin > 0
     delta = np.where(moving, 0.05 / np.where(moving, spin, 1.0), 0.0)
-    torque = {}
-    for k in (-2, -1, 0, 1, 2):
-        if k == 0:
-            qk, wk = q_p, w_p
-        else:
-            qk, wk = free_flow_batch(system.free, q_p, w_p, k * delta)
-        m = system._torque([model], t0, qk, wk) * system.moments
-        torque[k] = quat.rotate(qk, m)
+    steps = (0, -1, 1, -2, 2)
+    flows = [(q_p, w_p)] + [free_flow_batch(system.free, q_p, w_p, k * delta)
+                            for k in steps[1:]]
+    along = _inertial_torques(model, system, t0, np.stack([f[0] for f in flows]),
+                              np.stack([f[1] for f in flows]))
+    torque = dict(zip(steps, along))
     scale = np.max([np.sqrt(np.sum(m * m, axis=1)) for m in torque.values()], axis=0)
     ok = moving & (scale > 0)
     d = np.where(ok, delta, 1.0)

@@ -6,6 +6,7 @@ terminal (a pseudo-terminal in a subprocess), nothing under ``--quiet``; the out
 import os
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -93,15 +94,13 @@ def test_the_library_is_silent_unless_asked(capsys, immediate):
     assert err[0].startswith("attitude: outer: 100 % (3 of 3 steps), ")
 
 
-TERMINAL = """
+#: A driver that runs the child's lines (CHILD) with stdout and stderr on a
+#: pseudo-terminal, then prints OUTPUT there, and writes what the terminal received.
+ON_A_TERMINAL = """
 import os, pty, sys
 pid, fd = pty.fork()
 if pid == 0:          # the child: stderr is a terminal
-    from attitude.foundations import progress
-    progress.DELAY = 0.0
-    with progress.showing():
-        for _ in progress.track(range(5), 5, "demo", unit="steps"):
-            pass
+CHILD
     print("OUTPUT", flush=True)
     os._exit(0)
 chunks = []
@@ -118,12 +117,27 @@ sys.stdout.write(b"".join(chunks).decode(errors="replace"))
 """
 
 
+def _screen(child: str, env: dict, timeout: float) -> str:
+    """What a terminal shows of the Python lines ``child`` run on it, then OUTPUT."""
+    script = ON_A_TERMINAL.replace("CHILD", textwrap.indent(textwrap.dedent(child), "    "))
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=timeout, env=env)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
+BAR = """
+from attitude.foundations import progress
+progress.DELAY = 0.0
+with progress.showing():
+    for _ in progress.track(range(5), 5, "demo", unit="steps"):
+        pass
+"""
+
+
 def test_a_terminal_gets_a_bar_that_goes_away():
     pytest.importorskip("rich")
-    proc = subprocess.run([sys.executable, "-c", TERMINAL], capture_output=True, text=True,
-                          timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
-    assert proc.returncode == 0, proc.stderr
-    screen = proc.stdout
+    screen = _screen(BAR, {**os.environ, "PYTHONPATH": str(ROOT)}, 120)
     assert "demo" in screen and "5 of 5 steps" in screen      # rich's bar
     assert "\x1b[" in screen                                    # drawn with escapes
     assert "attitude: demo:" not in screen                      # not the plain lines
@@ -155,32 +169,17 @@ def test_run_workers_reports_the_chunks_the_scheduler_finished(tmp_path, capsys,
     assert second[-1].startswith("attitude: ensemble: done, 2 of 2 chunks in "), second
 
 
-COMPILE_ON_A_TERMINAL = """
-import os, pty, sys
-pid, fd = pty.fork()
-if pid == 0:          # the child: stderr is a terminal, numba's cache empty
-    from attitude.foundations import progress
-    from attitude.propagation.compiled import jit
-    progress.DELAY = 0.0          # shown at once, however fast this machine compiles
+#: numba's cache empty (a folder of its own): the kernel is compiled
+COMPILE = """
+from attitude.foundations import progress
+from attitude.propagation.compiled import jit
+progress.DELAY = 0.0          # shown at once, however fast this machine compiles
 
-    @jit
-    def twice(x):
-        return 2.0 * x
+@jit
+def twice(x):
+    return 2.0 * x
 
-    twice(1.0)
-    print("OUTPUT", flush=True)
-    os._exit(0)
-chunks = []
-while True:
-    try:
-        data = os.read(fd, 4096)
-    except OSError:
-        break
-    if not data:
-        break
-    chunks.append(data)
-os.waitpid(pid, 0)
-sys.stdout.write(b"".join(chunks).decode(errors="replace"))
+twice(1.0)
 """
 
 
@@ -195,10 +194,7 @@ def test_the_first_compile_on_a_terminal_is_a_report_that_goes_away(tmp_path):
         pytest.skip("numba absent or disabled")
     env = {**os.environ, "PYTHONPATH": str(ROOT), "NUMBA_CACHE_DIR": str(tmp_path)}
     env.pop("ATTITUDE_QUIET", None)
-    proc = subprocess.run([sys.executable, "-c", COMPILE_ON_A_TERMINAL], capture_output=True,
-                          text=True, timeout=300, env=env)
-    assert proc.returncode == 0, proc.stderr
-    screen = proc.stdout
+    screen = _screen(COMPILE, env, 300)
     words = COMPILE_NOTICE.removeprefix("attitude: ").rstrip(".")
     assert words in screen and "\x1b[" in screen                   # drawn by rich
     assert COMPILE_NOTICE not in screen                             # not the plain line

@@ -9,9 +9,17 @@ from scipy.spatial.transform import Rotation
 import attitude as att
 from attitude.model.orbit import KeplerOrbit
 from attitude.model.torques import EARTH_MU, ConstantTorque, GravityGradient
-from attitude.propagation.choice import AUTO_ACCURACY, choose_method
+from attitude.propagation.choice import (
+    AUTO_ACCURACY,
+    NU_MEASURE_COST,
+    _measured_turning,
+    _splitting_cost,
+    choose_method,
+)
 from attitude.propagation.compiled import NUMBA
+from attitude.propagation.kicks import System
 from attitude.propagation.splitting import choose_step
+from attitude.propagation.stepsize import torque_rates
 
 BOX = att.RigidBody.from_parts([att.MassProperties.solid_box(100.0, [0.5, 1.0, 2.0])])
 AXIS = np.array([0.2, 0.3, 0.93]) / np.linalg.norm([0.2, 0.3, 0.93])
@@ -48,6 +56,65 @@ def test_slow_spinner_in_fast_torque_gets_the_integrator():
         assert "compiled DOP853" in c.reason
     else:
         assert c.method == "splitting"
+
+
+#: benchmarks/spin_crossover.py's cases (deg/s, an hour, outputs every minute): DOP853
+#: at 1 deg/s, the splitting from 10 deg/s up (the crossover it measured)
+BENCHMARK_CASES = [(1.0, "integrator"), (10.0, "splitting"), (60.0, "splitting"),
+                   (360.0, "splitting")]
+
+
+@pytest.mark.parametrize(("rate_deg", "method"), BENCHMARK_CASES)
+def test_the_benchmark_cases_and_their_reasons(rate_deg, method):
+    c = _choice(rate_deg)
+    if not NUMBA:
+        assert c.method == "splitting" and c.reason.startswith("numba is not installed")
+        return
+    assert c.method == method
+    pace = GG.characteristic_rate(0.0, Q0, np.radians(rate_deg) * AXIS, BOX)
+    assert c.reason.startswith(f"spin {np.radians(rate_deg):.3g} rad/s against the "
+                               f"torque's pace {pace:.3g} rad/s: ")
+    if method == "integrator":
+        # DOP853 at its rtol, against the splitting's cost at nu = 0 (a lower bound:
+        # nu not measured), which could not save more than measuring nu costs
+        assert c.step is None and f"compiled DOP853 at rtol {c.rtol:.2g}" in c.reason
+        assert c.cost_integrator <= c.cost_splitting + NU_MEASURE_COST
+        assert "or more" in c.reason
+    else:
+        assert c.rtol is None and f"compiled splitting at step {c.step:.3g} s" in c.reason
+        assert c.cost_splitting < c.cost_integrator
+
+
+@pytest.mark.parametrize("rate_deg", [0.05, 0.5, 1.0, 1.5, 3.0, 5.0, 20.0, 100.0])
+def test_not_measuring_nu_loses_at_most_what_measuring_costs(rate_deg):
+    # against the decision with nu measured (the splitting's true cost and step): the
+    # integrator is chosen only if it is dearer by at most NU_MEASURE_COST, and a
+    # splitting runs at the step of the measured nu
+    w0 = np.radians(rate_deg) * AXIS
+    c = _choice(rate_deg)
+    own, nu, rate = _measured_turning([BOX], Q0[None], w0[None], [GG])
+    step, cost = _splitting_cost(HOUR, 1, own, rate, nu, AUTO_ACCURACY)
+    if not NUMBA:
+        assert c.method == "splitting" and c.cost_splitting == cost
+    elif c.method == "integrator":
+        assert c.cost_integrator <= cost + NU_MEASURE_COST
+        assert c.cost_splitting <= cost         # the lower bound it went by
+    else:
+        assert c.step == step and c.cost_splitting == cost < c.cost_integrator
+
+
+def test_nu_from_one_call_per_model_is_the_per_state_measurement():
+    # a TorqueModel is called once on the five states of the differences, a plain
+    # function once per state: the same nu but for the rounding of the differences
+    # (the fourth difference at spacing 0.05/|omega| divides rounding by ~(0.05)^4)
+    plain = [lambda t, q, w, body: GG(t, q, w, body)]
+    for rate_deg in (0.5, 10.0, 60.0):
+        system = System([BOX], [GG])
+        q_p, w_p = system.to_principal(Q0[None], np.radians(rate_deg) * AXIS[None])
+        one = torque_rates(System([BOX], [GG]), q_p, w_p, 4)
+        each = torque_rates(System([BOX], plain), q_p, w_p, 4)
+        np.testing.assert_allclose(one[1], each[1], rtol=1e-9)
+        assert one[1][0] > 0
 
 
 @pytest.mark.skipif(not NUMBA, reason="without numba the splitting keeps its step rule")
