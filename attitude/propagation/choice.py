@@ -102,6 +102,15 @@ def _compiled_form_expected(terms) -> bool:
                for m in terms)
 
 
+def _callback_only(terms) -> bool:
+    """Whether one external model runs by its own ``numba_torque`` and every other has a
+    compiled form: only the compiled DOP853 can call the callback
+    (:func:`attitude.propagation.compiled_torques.user_torque`)."""
+    user = [m for m in terms if getattr(m, "numba_torque", None) is not None
+            and getattr(m, "internal", False) is not True]
+    return len(user) == 1 and _compiled_form_expected([m for m in terms if m is not user[0]])
+
+
 def _spans(t: np.ndarray) -> tuple[float, float]:
     """How far the outputs reach forward and backward of the state's time, s."""
     if not t.size:
@@ -184,6 +193,10 @@ def choose_method(body_list, q0: np.ndarray, w0: np.ndarray, t: np.ndarray, torq
             f"{float(own.max()):.3g} rad/s")
     dop853 = f"compiled DOP853 at rtol {rtol:.2g} (~{cost_dop:.3g} step-costs)"
 
+    if NUMBA and not compiled and _callback_only(terms):
+        return Choice("integrator", f"{pace}: {dop853}: a torque with its own numba "
+                      "function (numba_torque) runs on the compiled DOP853 only", rtol=rtol,
+                      cost_integrator=cost_dop, cost_splitting=cost_split)
     if compiled and cost_dop <= cost_split + NU_MEASURE_COST:
         # nu is not measured: the splitting cannot be cheaper, or not by more than
         # measuring nu would cost

@@ -126,3 +126,17 @@ def test_propagate_runs_the_callback():
     _agree((eph.dataset.quaternion.values, eph.dataset.angular_velocity.values),
            integrate_reference(BODY, Q0, W0, TIMES, torques=[Damper()], rtol=RTOL,
                                compiled=False))
+
+
+def test_the_automatic_method_runs_the_callback_on_dop853():
+    """With nothing given, a model with a ``numba_torque`` (beside a built-in one) runs on
+    the compiled DOP853, the one compiled path that can call it, at the automatic rtol."""
+    state = att.AttitudeState("2030-01-01", Rotation.from_quat(Q0), W0)
+    eph = att.propagate(BODY, state, TIMES, torques=[Damper()])
+    attrs = eph.dataset.attrs
+    assert attrs["method"] == "integrator" and "numba_torque" in attrs["method_reason"]
+    reference = integrate_reference(BODY, Q0, W0, TIMES, torques=[Damper()], rtol=RTOL,
+                                    compiled=False)
+    # the automatic accuracy is ~1e-8 rad over the run (choice.AUTO_ACCURACY): 100 times
+    # that bounds the error model's spread
+    assert attitude_angle(eph.dataset.quaternion.values, reference[0]).max() < 1e-6
