@@ -35,6 +35,7 @@ from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
+from attitude.binary.ensembles import input_variables
 from attitude.binary.propagate import propagate_binary
 from attitude.binary.system import BinaryState, BinarySystem
 from attitude.foundations.constants import G as GRAVITATIONAL_CONSTANT
@@ -43,7 +44,7 @@ from attitude.foundations.quantities import to_si
 from attitude.model.body import MassProperties, RigidBody
 from attitude.model.freebody import diagnose_many
 from attitude.model.sampling import tumbling_state
-from attitude.propagation.cluster import client_for, shared_local_client
+from attitude.propagation.cluster import resolve_client
 
 __all__ = ["hyperbola", "close_encounter", "sample_encounter", "encounter_ensemble",
            "ellipsoid_from_ratios"]
@@ -446,10 +447,7 @@ def encounter_ensemble(members, times, *, method: str | None = None,
     if client is None:
         rows = _run_chunk(members, times, run)
     else:
-        if client is True or client == "local":
-            client = shared_local_client()
-        elif isinstance(client, str):
-            client = client_for(client)
+        client = resolve_client(client)
         if chunk_size is None:
             workers = max(1, len(client.scheduler_info().get("workers", {})))
             chunk_size = max(1, math.ceil(len(members) / (2 * workers)))
@@ -480,12 +478,8 @@ def _dataset(rows: list) -> xr.Dataset:
     for key in ("spin_momentum_change", "angular_momentum_drift"):
         data[key] = ("member", np.array([r.get(key, math.nan) for r in rows], dtype=float),
                      {"units": "1"})
-    names = []
-    for r in rows:
-        names += [k for k in r["inputs"] if k not in names]
-    for key in names:
-        data[key] = ("member", np.array([r["inputs"].get(key, math.nan) for r in rows],
-                                        dtype=float), {"long_name": "input"})
+    inputs = input_variables(rows)
+    data.update(inputs)
     ok = [r for r in rows if r["status"] == 0]
 
     def fractions(when):
@@ -496,4 +490,4 @@ def _dataset(rows: list) -> xr.Dataset:
                       attrs={"title": "attitude: an ensemble of close encounters",
                              "regime_fractions": fractions("after"),
                              "regime_fractions_before": fractions("before"),
-                             "inputs": list(names)})
+                             "inputs": list(inputs)})

@@ -32,7 +32,7 @@ from attitude.binary.propagate import propagate_binary, propagate_family
 from attitude.binary.system import BinaryState, BinarySystem, Impulse, impact_delta_v
 from attitude.foundations.errors import AttitudeError, BinarySystemError
 from attitude.model.body import MassProperties, RigidBody
-from attitude.propagation.cluster import client_for, shared_local_client
+from attitude.propagation.cluster import resolve_client
 
 __all__ = ["ensemble", "sample_dart", "STATUS_OK", "STATUS_INVALID", "STATUS_FAILED"]
 
@@ -216,12 +216,15 @@ def _families(members, times, options) -> dict:
     return out
 
 
-def _client(client):
-    if client is True or client == "local":
-        return shared_local_client()
-    if isinstance(client, str):
-        return client_for(client)
-    return client
+def input_variables(rows: list) -> dict:
+    """The members' inputs (each row's ``"inputs"`` dict) as ``member`` variables of a
+    Dataset, NaN where a member lacks one (the ensembles of binaries and of encounters)."""
+    names = []
+    for r in rows:
+        names += [k for k in r["inputs"] if k not in names]
+    return {key: ("member", np.array([r["inputs"].get(key, math.nan) for r in rows],
+                                     dtype=float), {"long_name": "input"})
+            for key in names}
 
 
 def ensemble(members, times, *, method: str | None = None, rtol: float | None = None,
@@ -282,7 +285,7 @@ def ensemble(members, times, *, method: str | None = None, rtol: float | None = 
     if client is None:
         rows = _run_chunk(members, times, options)
     else:
-        client = _client(client)
+        client = resolve_client(client)
         if chunk_size is None:
             workers = max(1, len(client.scheduler_info().get("workers", {})))
             chunk_size = max(1, math.ceil(len(members) / workers))
@@ -310,15 +313,11 @@ def _dataset(rows: list, chaos: bool) -> xr.Dataset:
             continue
         data[key] = ("member", np.array([r[key] for r in rows], dtype=float),
                      {"units": units[key]})
-    names = []
-    for r in rows:
-        names += [k for k in r["inputs"] if k not in names]
-    for key in names:
-        data[key] = ("member", np.array([r["inputs"].get(key, math.nan) for r in rows],
-                                        dtype=float), {"long_name": "input"})
+    inputs = input_variables(rows)
+    data.update(inputs)
     ok = [r["secondary_regime"] for r in rows if r["status"] == STATUS_OK]
     fractions = {reg: ok.count(reg) / len(ok) for reg in REGIMES if ok.count(reg)}
     return xr.Dataset(data, coords={"member": np.arange(n)},
                       attrs={"title": "attitude: an ensemble of binary systems",
                              "regime_fractions": fractions,
-                             "inputs": list(names)})
+                             "inputs": list(inputs)})

@@ -24,13 +24,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from astropy.time import Time
 
 from ..foundations import quaternion as quat
 from ..foundations.errors import AttitudeError
 from ..foundations.quantities import to_si
 from ..model.regimes import PERIOD_KEYS
-from ..photometry.observations import LightcurveObservations, seconds_since
+from ..photometry.observations import LightcurveObservations, sample_times, seconds_since
 
 __all__ = ["AttitudeObservations", "AngularVelocityObservations", "PeriodObservations",
            "LightcurveObservations", "seconds_since"]
@@ -47,19 +46,6 @@ def _sigma(value, unit: str, key: str) -> float:
         raise AttitudeError(f"must be one finite, positive uncertainty in {unit}, got "
                             f"{value!r}", key=key)
     return float(s)
-
-
-def _times(times, n_expected: int | None, key: str):
-    if isinstance(times, Time):
-        t = times.reshape(-1)
-    else:
-        t = np.atleast_1d(_si(times, "s", key))
-        if not np.all(np.isfinite(t)):
-            raise AttitudeError("times must be finite", key=key)
-    if t.size == 0 or (n_expected is not None and t.size != n_expected):
-        raise AttitudeError(f"expected {n_expected} times (one per sample), got {t.size}",
-                            key=key)
-    return t
 
 
 @dataclass(frozen=True)
@@ -95,7 +81,7 @@ class AttitudeObservations:
         if np.any(norm == 0):
             raise AttitudeError("a quaternion is zero", key="quaternions")
         object.__setattr__(self, "quaternions", q / norm)
-        object.__setattr__(self, "times", _times(self.times, q.shape[0], "times"))
+        object.__setattr__(self, "times", sample_times(self.times, q.shape[0], "times"))
         object.__setattr__(self, "sigma", _sigma(self.sigma, "rad", "sigma"))
 
     @property
@@ -135,7 +121,7 @@ class AngularVelocityObservations:
             raise AttitudeError(f"expected finite rates of shape (n, 3), got shape "
                                 f"{w.shape}", key="omega")
         object.__setattr__(self, "omega", w)
-        object.__setattr__(self, "times", _times(self.times, w.shape[0], "times"))
+        object.__setattr__(self, "times", sample_times(self.times, w.shape[0], "times"))
         object.__setattr__(self, "sigma", _sigma(self.sigma, "rad/s", "sigma"))
 
     @property

@@ -55,8 +55,9 @@ def seconds_since(epoch: Time, times) -> np.ndarray:
     return np.atleast_1d(to_si(times, "s", name="times", error=AttitudeError))
 
 
-def _times(times, n_expected: int | None, key: str):
-    """Time array or finite seconds, of the expected length."""
+def sample_times(times, n_expected: int | None, key: str):
+    """Time array or finite seconds, of the expected length (``n_expected`` None: any);
+    the samples' times of every observations type (photometry and fitting)."""
     if isinstance(times, Time):
         t = times.reshape(-1)
     else:
@@ -180,7 +181,7 @@ class LightcurveObservations:
                                 + (f" (point {int(bad[0])} is {m.ravel()[bad[0]]})"
                                    if len(bad) else ""), **where)
         object.__setattr__(self, "magnitudes", m)
-        object.__setattr__(self, "times", _times(self.times, m.size, "times"))
+        object.__setattr__(self, "times", sample_times(self.times, m.size, "times"))
         sig = np.asarray(self.sigma, dtype=float)
         if sig.shape not in ((), m.shape) or not np.all(np.isfinite(sig) & (sig > 0)):
             raise AttitudeError(f"{self.name}: expected one or {m.size} finite, positive "

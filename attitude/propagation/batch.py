@@ -21,7 +21,7 @@ from ..model.body import RigidBody
 from ..model.ephemeris import Ephemeris, build_dataset, momentum_and_energy
 from ..model.population import Ensemble
 from ..model.sampling import MODELS
-from .cluster import client_for, shared_local_client
+from .cluster import resolve_client
 from .reference import integrate_reference_batch
 from .splitting import integrate_splitting
 from .torquefree import exact_arrays
@@ -176,10 +176,7 @@ def _dask_arrays(bounds, args, T, client):
         raise AttitudeError("client=/chunks= need the optional 'dask' package: pip install "
                             "'attitude-dynamics[dask]'") from None
 
-    if client is True or client == "local":
-        client = shared_local_client()
-    elif isinstance(client, str):
-        client = client_for(client)
+    client = resolve_client(client)
     shapes = {"q": (T, 4), "w": (T, 3), "L": (T, 3), "E": (T,), "status": ()}
     dtypes = {"status": np.int8}
     pieces = {k: [] for k in shapes}

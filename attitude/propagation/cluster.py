@@ -15,7 +15,7 @@ import os
 
 from ..foundations.errors import AttitudeError
 
-__all__ = ["local_cluster", "shared_local_client", "client_for"]
+__all__ = ["local_cluster", "shared_local_client", "client_for", "resolve_client"]
 
 #: The LocalCluster of ``client="local"``, kept for the session.
 _SHARED: dict = {}
@@ -37,6 +37,24 @@ def shared_local_client():
         _SHARED["client"] = cm.__enter__()
         atexit.register(cm.__exit__, None, None, None)
     return _SHARED["client"]
+
+
+def resolve_client(client):
+    """The dask client a ``client=`` argument names: ``True`` or ``"local"`` the shared
+    LocalCluster (:func:`shared_local_client`), an address string its scheduler
+    (:func:`client_for`), anything else (a ``Client``, or None) as it is.
+
+    Examples
+    --------
+    >>> from attitude.propagation.cluster import resolve_client
+    >>> resolve_client(None) is None
+    True
+    """
+    if client is True or client == "local":
+        return shared_local_client()
+    if isinstance(client, str):
+        return client_for(client)
+    return client
 
 
 def client_for(address: str):
