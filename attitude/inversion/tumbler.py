@@ -51,6 +51,7 @@ References
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -531,10 +532,10 @@ RATIO_GRID = ((0.55, 0.85), (0.7, 0.92), (0.5, 0.75))
 
 def period_pairs(periods) -> list[tuple[float, float]]:
     """Candidate ``(P_phi, P_psi)`` from the two fundamental periods of a tumbler's
-    lightcurve: one of them is ``P_phi`` (or both are combinations), the other
-    ``1 / (n1 / P_phi + n2 / P_psi)`` for the :data:`COMBINATIONS`; only pairs with
-    ``P_psi > P_phi`` (every mode of a triaxial body has them, as :func:`energy_for_
-    period_ratio` finds).
+    lightcurve: one of them is ``P_phi``, the other ``1 / (n1 / P_phi + n2 / P_psi)`` for
+    the :data:`COMBINATIONS`, pairs with ``P_psi > P_phi``; then the same with one of them
+    ``P_psi`` (the slow rotation of a SAM seen directly, or a LAM's), pairs with
+    ``P_psi > 0.4 P_phi`` (a LAM near its long axis has ``P_psi < P_phi``).
 
     Examples
     --------
@@ -551,6 +552,16 @@ def period_pairs(periods) -> list[tuple[float, float]]:
             f_psi = (1.0 / other - n1 / phi) / n2
             if f_psi > 0.0 and 1.0 / f_psi > phi * (1 + 1e-9):
                 pair = (float(phi), float(1.0 / f_psi))
+                if all(abs(pair[1] / q[1] - 1) > 1e-6 or abs(pair[0] / q[0] - 1) > 1e-6
+                       for q in pairs):
+                    pairs.append(pair)
+    for psi, other in ((p[0], p[1]), (p[1], p[0])):
+        for n1, n2 in COMBINATIONS:
+            if n1 == 0:
+                continue
+            f_phi = (1.0 / other - n2 / psi) / n1
+            if f_phi > 0.0 and psi > 0.4 / f_phi:
+                pair = (float(1.0 / f_phi), float(psi))
                 if all(abs(pair[1] / q[1] - 1) > 1e-6 or abs(pair[0] / q[0] - 1) > 1e-6
                        for q in pairs):
                     pairs.append(pair)
@@ -658,7 +669,8 @@ def rank_starts(model: ConvexModel, starts, regime: str, *, max_iterations: int 
 
 def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
                    directions: int = 8, phases: int = 4, polish: int = 2, keep: int = 3,
-                   coarse=(3, 2), max_iterations: int = 40) -> list[TumblerFit]:
+                   coarse=(3, 2), max_iterations: int = 40,
+                   timings: dict | None = None) -> list[TumblerFit]:
     """Tumbler fits from the data alone, best first.
 
     1. The two fundamental periods (``periods``, else :func:`attitude.photometry.
@@ -669,6 +681,10 @@ def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
        coarse Gaussian image of ``coarse = (rows, degree)``) refined by a short fit on
        that coarse image;
     4. the ``keep`` best of those fitted on the full model (:func:`fit_tumbler`).
+
+    timings : dict, optional
+        Filled with the CPU seconds (this process) of the stages: ``periods``,
+        ``search`` (ranking and coarse fits) and ``refinement`` (the full fits).
 
     Returns
     -------
@@ -683,11 +699,19 @@ def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
     >>> search_tumbler.__name__
     'search_tumbler'
     """
+    clock = [time.process_time()]
+
+    def lap(name):
+        clock.append(time.process_time())
+        if timings is not None:
+            timings[name] = clock[-1] - clock[-2]
+
     if periods is None:
         magnitudes = -2.5 * np.log10(model.data)
         sigma = 2.5 / np.log(10.0) * model.sigma / model.data
         periods = fit_periods(model.time, magnitudes, sigma, n_periods=2,
                               sessions=model.block).periods
+    lap("periods")
     pairs = period_pairs(periods)
     rough = ConvexModel(list(model.observations), GaussianImage(*coarse), t0=model.t0)
     half = phases // 2 if phases > 1 else 1
@@ -701,7 +725,9 @@ def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
                               max_iterations=15, homogeneity=False)
             candidates.append((fit.chi2, fit))
     candidates.sort(key=lambda c: c[0])
+    lap("search")
     fits = [fit_tumbler(model, [fit.parameters[k] for k in PARAMETERS],
                         regime=fit.regime, max_iterations=max_iterations)
             for _, fit in candidates[:keep]]
+    lap("refinement")
     return sorted(fits, key=lambda f: f.chi2)
