@@ -75,8 +75,8 @@ HERTHA = ROOT / "tests" / "data" / "inversion" / "hertha_135_rel.txt"
 #: The start of ADAM's own Hertha example (135_oct.ini: beta, lambda 52, 272 deg, P 8.40060 h).
 HERTHA_POLE, HERTHA_PERIOD_H = (272.0, 52.0), 8.40060
 
-CONVEXINV_INPUT = """220 1 inital lambda [deg] (0/1 - fixed/free)
-0 1 initial beta [deg] (0/1 - fixed/free)
+CONVEXINV_INPUT = """{lon} 1 inital lambda [deg] (0/1 - fixed/free)
+{lat} 1 initial beta [deg] (0/1 - fixed/free)
 {period} 1 inital period [hours] (0/1 - fixed/free)
 0 zero time [JD]
 0 initial rotation angle [deg]
@@ -100,20 +100,21 @@ def run_attitude(poles: int, data=DATA, period_h=PERIOD_H) -> dict:
             "mirror": res.alternatives[0][1], "poles": poles}
 
 
-def run_attitude_single(data=DATA, period_h=PERIOD_H) -> dict:
+def run_attitude_single(data=DATA, period_h=PERIOD_H, pole=(220.0, 0.0)) -> dict:
     """One fit from convexinv's start, as convexinv runs: the like-for-like timing."""
     start = time.process_time()
     model = ConvexModel(read_damit_lightcurves(data), GaussianImage(8, 6))
-    fit = fit_convex(model, np.radians(220.0), 0.0, period_h * 3600, max_iterations=50)
+    fit = fit_convex(model, *np.radians(pole), period_h * 3600, max_iterations=50)
     return {"pole_deg": list(fit.pole), "period_h": fit.period / 3600, "rms": fit.rms,
             "dark_facet": fit.dark_facet, "cpu_s": time.process_time() - start,
             "evaluations": fit.n_evaluations}
 
 
-def run_convexinv(exe: Path, data_path=DATA, period_h=PERIOD_H) -> dict:
+def run_convexinv(exe: Path, data_path=DATA, period_h=PERIOD_H, pole=(220.0, 0.0)) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        (tmp / "input").write_text(CONVEXINV_INPUT.format(period=period_h))
+        (tmp / "input").write_text(CONVEXINV_INPUT.format(period=period_h, lon=pole[0],
+                                                          lat=pole[1]))
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         with open(data_path) as data:
             proc = subprocess.run([str(exe), "-v", "-o", "areas", "-p", "par", "input",
@@ -283,12 +284,18 @@ def run_pa_case(seed: int, *, poles=6, max_iterations=50) -> dict:
 
 def run_hertha(exe: Path | None, poles: int) -> dict:
     """(135) Hertha's 30 relative lightcurves (ADAM's example data, CC BY 4.0): attitude
-    and convexinv on the same file from the same period; both against ADAM's start (the
-    published model's pole and period as ADAM's example uses them)."""
+    and convexinv on the same file from the same period, from convexinv's default start
+    (220, 0) deg and from ADAM's pole; attitude's ``invert`` from its pole starts; all
+    against ADAM's start (the published model's pole and period as ADAM's example uses
+    them)."""
     out = {"attitude (one start)": run_attitude_single(HERTHA, HERTHA_PERIOD_H),
+           "attitude (one start at ADAM's pole)": run_attitude_single(
+               HERTHA, HERTHA_PERIOD_H, HERTHA_POLE),
            "attitude (invert)": run_attitude(poles, HERTHA, HERTHA_PERIOD_H)}
     if exe:
         out["convexinv"] = run_convexinv(exe, HERTHA, HERTHA_PERIOD_H)
+        out["convexinv (start at ADAM's pole)"] = run_convexinv(exe, HERTHA, HERTHA_PERIOD_H,
+                                                                HERTHA_POLE)
     for name, r in out.items():
         mirror = [(r["pole_deg"][0] + 180.0) % 360.0, r["pole_deg"][1]]
         r["to_reference_pole_deg"] = min(_angle(r["pole_deg"], HERTHA_POLE),
@@ -298,7 +305,7 @@ def run_hertha(exe: Path | None, poles: int) -> dict:
               f"({r['to_reference_pole_deg']:.2f} from ADAM's) P {r['period_h']:.7f} h  rms "
               f"{r['rms']:.4f}  CPU {r['cpu_s']:.1f} s", flush=True)
     if exe:
-        a, c = out["attitude (invert)"], out["convexinv"]
+        a, c = out["attitude (invert)"], out["convexinv (start at ADAM's pole)"]
         out["agreement"] = {"pole_deg": _angle(a["pole_deg"], c["pole_deg"]),
                             "period_rel": a["period_h"] / c["period_h"] - 1.0,
                             "rms_rel": a["rms"] / c["rms"] - 1.0}
@@ -421,10 +428,24 @@ def run_synthetic_tumblers(cases=5, kinds=("apophis-like SAM", "toutatis-like LA
                   f"{np.round(r['z_energy_ratio_a_ratio_b'], 1)}, ok {r['ok']}, CPU "
                   f"{r['cpu_s']:.0f} s {r['stage_cpu_s']}", flush=True)
         out[kind] = {"cases": rows, "ok": sum(r["ok"] for r in rows), "n": len(rows)}
-    r = run_tumbler_case("issue SAM", 0)
-    print(f"issue case: {r['regime']} ok {r['ok']} CPU {r['cpu_s']:.0f} s", flush=True)
-    out["issue SAM (A/C 0.55, B/C 0.9, E/E0 1.027)"] = r
+    out[ISSUE_CASE] = run_issue_case()
     return out
+
+
+ISSUE_CASE = "issue SAM (A/C 0.55, B/C 0.9, E/E0 1.027), 968 facets"
+
+
+def run_issue_case() -> dict:
+    """The issue's first paragraph (a SAM of A/C 0.55, B/C 0.9, E/E0 1.027, here P_phi
+    10 h; 40 days at 30 min, 0.01 mag; 1920 points) from the data alone on a 968-facet
+    Gaussian image (11 rows, degree 6): the timing case of the issue (2000 points, a
+    1000-facet model, under 10 minutes), each stage's CPU time."""
+    r = run_tumbler_case("issue SAM", 0, rows=11, degree=6)
+    print(f"issue case: {r['regime']} periods {r['periods_h'][0]:.5f} {r['periods_h'][1]:.4f}"
+          f" h (truth {r['true_periods_h'][0]:.5f} {r['true_periods_h'][1]:.4f}), L "
+          f"{r['L_error_deg']:.2f} deg, ok {r['ok']}, CPU {r['cpu_s']:.0f} s "
+          f"{r['stage_cpu_s']}", flush=True)
+    return r
 
 
 def main(argv=None) -> None:
@@ -436,6 +457,8 @@ def main(argv=None) -> None:
                         help="the synthetic principal-axis suite only")
     parser.add_argument("--synthetic-tumblers", action="store_true",
                         help="the synthetic tumbler suite only")
+    parser.add_argument("--issue-case", action="store_true",
+                        help="only the issue's SAM case (the timing case), from the data alone")
     parser.add_argument("--hertha", action="store_true",
                         help="(135) Hertha's lightcurves only (with --convexinv: both)")
     parser.add_argument("--cases", type=int, default=None,
@@ -458,6 +481,8 @@ def main(argv=None) -> None:
             args.cases or 10, lambda part: save("synthetic principal-axis", part))
     if args.synthetic_tumblers:
         results["synthetic tumblers"] = run_synthetic_tumblers(args.cases or 5)
+    if args.issue_case:
+        results["synthetic tumblers: " + ISSUE_CASE] = run_issue_case()
     if args.hertha:
         results["hertha"] = run_hertha(args.convexinv, args.poles)
     if not results:

@@ -40,7 +40,7 @@ def test_the_synthetic_shape_is_convex_in_principal_axes():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [1, 4])
+@pytest.mark.parametrize("seed", [0, 1])
 def test_synthetic_principal_axis_rotator_is_recovered(seed):
     r = _benchmark().run_pa_case(seed)
     print(f"\nseed {seed}: pole {r['best_to_truth_deg']:.2f} / "
