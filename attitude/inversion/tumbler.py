@@ -51,6 +51,7 @@ References
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -291,7 +292,7 @@ def _stages(model: ConvexModel, continuation) -> list[ConvexModel]:
 def fit_tumbler(model: ConvexModel, start, *, regime: str | None = None, free=None,
                 coefficients=None, continuation=(0.25, 0.5), lambert: float = 0.1,
                 convexity: float = 0.1, max_iterations: int = 40,
-                tolerance: float = 1e-6) -> TumblerFit:
+                tolerance: float = 1e-6, homogeneity: bool = True) -> TumblerFit:
     """Fit a convex shape and the tumbling state of :data:`PARAMETERS` from a start.
 
     Parameters
@@ -316,6 +317,10 @@ def fit_tumbler(model: ConvexModel, start, *, regime: str | None = None, free=No
         Iterations of each stage.
     tolerance : float
         Relative change of the cost that ends a stage.
+    homogeneity : bool
+        Compute the moment ratios of the fitted shape (:attr:`TumblerFit.shape_ratios`,
+        a polyhedron from the areas: about a second); False leaves them NaN (the
+        search's coarse fits, which only rank).
 
     Returns
     -------
@@ -398,10 +403,12 @@ def fit_tumbler(model: ConvexModel, start, *, regime: str | None = None, free=No
     sigma = _uncertainties(shape, u, free_index, regime, model.n_points)
     moments, _, w0 = _state(physical)
     d = diagnose_many(moments, w0)
-    try:
-        ratios, tilt = shape_moment_ratios(model.image, shape.areas)
-    except Exception:  # noqa: BLE001  (a degenerate shape: the test is not available)
-        ratios, tilt = (np.nan, np.nan), np.nan
+    ratios, tilt = (np.nan, np.nan), np.nan
+    if homogeneity:
+        try:
+            ratios, tilt = shape_moment_ratios(model.image, shape.areas)
+        except Exception:  # noqa: BLE001  (a degenerate shape: the test is not available)
+            pass
     return TumblerFit(regime=regime,
                       parameters={k: float(v) for k, v in zip(PARAMETERS, physical)},
                       uncertainties={k: float(v) for k, v in zip(PARAMETERS, sigma)},
@@ -525,10 +532,10 @@ RATIO_GRID = ((0.55, 0.85), (0.7, 0.92), (0.5, 0.75))
 
 def period_pairs(periods) -> list[tuple[float, float]]:
     """Candidate ``(P_phi, P_psi)`` from the two fundamental periods of a tumbler's
-    lightcurve: one of them is ``P_phi`` (or both are combinations), the other
-    ``1 / (n1 / P_phi + n2 / P_psi)`` for the :data:`COMBINATIONS`; only pairs with
-    ``P_psi > P_phi`` (every mode of a triaxial body has them, as :func:`energy_for_
-    period_ratio` finds).
+    lightcurve: one of them is ``P_phi``, the other ``1 / (n1 / P_phi + n2 / P_psi)`` for
+    the :data:`COMBINATIONS`, pairs with ``P_psi > P_phi``; then the same with one of them
+    ``P_psi`` (the slow rotation of a SAM seen directly, or a LAM's), pairs with
+    ``P_psi > 0.4 P_phi`` (a LAM near its long axis has ``P_psi < P_phi``).
 
     Examples
     --------
@@ -545,6 +552,16 @@ def period_pairs(periods) -> list[tuple[float, float]]:
             f_psi = (1.0 / other - n1 / phi) / n2
             if f_psi > 0.0 and 1.0 / f_psi > phi * (1 + 1e-9):
                 pair = (float(phi), float(1.0 / f_psi))
+                if all(abs(pair[1] / q[1] - 1) > 1e-6 or abs(pair[0] / q[0] - 1) > 1e-6
+                       for q in pairs):
+                    pairs.append(pair)
+    for psi, other in ((p[0], p[1]), (p[1], p[0])):
+        for n1, n2 in COMBINATIONS:
+            if n1 == 0:
+                continue
+            f_phi = (1.0 / other - n2 / psi) / n1
+            if f_phi > 0.0 and psi > 0.4 / f_phi:
+                pair = (float(1.0 / f_phi), float(psi))
                 if all(abs(pair[1] / q[1] - 1) > 1e-6 or abs(pair[0] / q[0] - 1) > 1e-6
                        for q in pairs):
                     pairs.append(pair)
@@ -569,26 +586,39 @@ def tumbler_starts(pairs, *, ratios=RATIO_GRID, directions: int = 8, phases: int
     >>> [(rows.shape, regime) for rows, regime in starts]
     [((16, 8), 'SAM'), ((24, 8), 'LAM')]
     """
+    out = []
+    for regime in ("SAM", "LAM"):
+        rows = [group for group, mode, _ in _start_groups(pairs, ratios, directions, phases)
+                if mode == regime]
+        if rows:
+            out.append((np.concatenate(rows), regime))
+    return out
+
+
+def _start_groups(pairs, ratios, directions, phases):
+    """The starts of :func:`tumbler_starts`, one group per pair, moment ratios and mode:
+    ``[(rows, regime, (pair, ratios)), ...]``; the energies of all groups of a mode come
+    from one vectorised bisection."""
     k = np.arange(directions) + 0.5
     dec = np.arcsin(1.0 - 2.0 * k / directions)
     ra = (np.pi * (3.0 - np.sqrt(5.0)) * np.arange(directions)) % (2.0 * np.pi)
     angles = 2.0 * np.pi * np.arange(phases) / phases
+    grid = np.stack(np.meshgrid(np.arange(directions), angles, angles, indexing="ij"),
+                    -1).reshape(-1, 3)
+    i = grid[:, 0].astype(int)
+    pair = np.asarray(pairs, dtype=float).reshape(-1, 2)
+    a, b = np.array(ratios, dtype=float).reshape(-1, 2).T
+    p_phi = np.repeat(pair[:, 0], a.size)
+    ratio = np.repeat(pair[:, 1] / pair[:, 0], a.size)
+    aa, bb = np.tile(a, len(pair)), np.tile(b, len(pair))
     out = []
     for regime in ("SAM", "LAM"):
-        rows = []
-        for p_phi, p_psi in pairs:
-            a, b = np.array(ratios, dtype=float).T
-            er = energy_for_period_ratio(a, b, p_psi / p_phi, regime)
-            for j in np.nonzero(np.isfinite(er))[0]:
-                grid = np.stack(np.meshgrid(np.arange(directions), angles, angles,
-                                            indexing="ij"), -1).reshape(-1, 3)
-                i = grid[:, 0].astype(int)
-                rows.append(np.stack([ra[i], dec[i], np.full(i.size, er[j]),
-                                      np.full(i.size, a[j]), np.full(i.size, b[j]),
-                                      np.full(i.size, p_phi), grid[:, 1], grid[:, 2]],
-                                     axis=1))
-        if rows:
-            out.append((np.concatenate(rows), regime))
+        er = energy_for_period_ratio(aa, bb, ratio, regime)
+        for j in np.nonzero(np.isfinite(er))[0]:
+            rows = np.stack([ra[i], dec[i], np.full(i.size, er[j]), np.full(i.size, aa[j]),
+                             np.full(i.size, bb[j]), np.full(i.size, p_phi[j]), grid[:, 1],
+                             grid[:, 2]], axis=1)
+            out.append((rows, regime, (tuple(pair[j // a.size]), (aa[j], bb[j]))))
     return out
 
 
@@ -639,7 +669,8 @@ def rank_starts(model: ConvexModel, starts, regime: str, *, max_iterations: int 
 
 def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
                    directions: int = 8, phases: int = 4, polish: int = 2, keep: int = 3,
-                   coarse=(3, 2), max_iterations: int = 40) -> list[TumblerFit]:
+                   coarse=(3, 2), max_iterations: int = 40,
+                   timings: dict | None = None) -> list[TumblerFit]:
     """Tumbler fits from the data alone, best first.
 
     1. The two fundamental periods (``periods``, else :func:`attitude.photometry.
@@ -650,6 +681,10 @@ def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
        coarse Gaussian image of ``coarse = (rows, degree)``) refined by a short fit on
        that coarse image;
     4. the ``keep`` best of those fitted on the full model (:func:`fit_tumbler`).
+
+    timings : dict, optional
+        Filled with the CPU seconds (this process) of the stages: ``periods``,
+        ``search`` (ranking and coarse fits) and ``refinement`` (the full fits).
 
     Returns
     -------
@@ -664,28 +699,35 @@ def search_tumbler(model: ConvexModel, periods=None, *, ratios=RATIO_GRID,
     >>> search_tumbler.__name__
     'search_tumbler'
     """
+    clock = [time.process_time()]
+
+    def lap(name):
+        clock.append(time.process_time())
+        if timings is not None:
+            timings[name] = clock[-1] - clock[-2]
+
     if periods is None:
         magnitudes = -2.5 * np.log10(model.data)
         sigma = 2.5 / np.log(10.0) * model.sigma / model.data
         periods = fit_periods(model.time, magnitudes, sigma, n_periods=2,
                               sessions=model.block).periods
+    lap("periods")
     pairs = period_pairs(periods)
     rough = ConvexModel(list(model.observations), GaussianImage(*coarse), t0=model.t0)
     half = phases // 2 if phases > 1 else 1
     candidates = []
-    for p_phi, p_psi in pairs:
-        for a, b in ratios:
-            for rows, regime in tumbler_starts([(p_phi, p_psi)], ratios=[(a, b)],
-                                               directions=directions, phases=phases):
-                # psi0 and psi0 + pi differ little for a nearly symmetric coarse shape
-                rows = rows[rows[:, 7] < np.pi - 1e-9] if half > 1 else rows
-                chi2 = rank_starts(rough, rows, regime)
-                for i in np.argsort(chi2)[:polish]:
-                    fit = fit_tumbler(rough, rows[i], regime=regime, continuation=(),
-                                      max_iterations=15)
-                    candidates.append((fit.chi2, fit))
+    for rows, regime, _ in _start_groups(pairs, ratios, directions, phases):
+        # psi0 and psi0 + pi differ little for a nearly symmetric coarse shape
+        rows = rows[rows[:, 7] < np.pi - 1e-9] if half > 1 else rows
+        chi2 = rank_starts(rough, rows, regime)
+        for i in np.argsort(chi2)[:polish]:
+            fit = fit_tumbler(rough, rows[i], regime=regime, continuation=(),
+                              max_iterations=15, homogeneity=False)
+            candidates.append((fit.chi2, fit))
     candidates.sort(key=lambda c: c[0])
+    lap("search")
     fits = [fit_tumbler(model, [fit.parameters[k] for k in PARAMETERS],
                         regime=fit.regime, max_iterations=max_iterations)
             for _, fit in candidates[:keep]]
+    lap("refinement")
     return sorted(fits, key=lambda f: f.chi2)
