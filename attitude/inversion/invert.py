@@ -348,14 +348,18 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
                               "values", key="period")
     # the pole from starts over the sphere at the period found (a free period lets a fit
     # from a poor pole wander to a neighbouring minimum), then the best and its mirror
-    # refined with the period free
+    # refined with the period free; the mirror (lambda + 180 deg) gets a shape of its
+    # own first, fitted from the sphere there: the best pole's shape does not suit it,
+    # and refined from that shape its chi2 would not be a fair comparison
     fixed = sorted((fit_convex(model, lon, lat, p0, free_period=False, convexity=convexity,
                                max_iterations=max_iterations)
                     for lon, lat in pole_starts(poles)), key=lambda f: f.chi2)
-    best, mirror = (fit_convex(model, lon, fixed[0].latitude, p0,
-                               coefficients=fixed[0].coefficients, convexity=convexity,
+    own = fit_convex(model, fixed[0].longitude + np.pi, fixed[0].latitude, p0,
+                     free_period=False, convexity=convexity, max_iterations=max_iterations)
+    best, mirror = (fit_convex(model, start.longitude, start.latitude, p0,
+                               coefficients=start.coefficients, convexity=convexity,
                                max_iterations=max_iterations)
-                    for lon in (fixed[0].longitude, fixed[0].longitude + np.pi))
+                    for start in (fixed[0], own))
     fits = fixed
     if mirror.chi2 < best.chi2:
         best, mirror = mirror, best
