@@ -37,6 +37,10 @@ __all__ = ["ConvexModel", "ConvexFit", "ShapeFit", "fit_convex", "fit_shape_rota
            "difference_columns", "spin_to_body"]
 
 
+#: The residuals of a trial step whose areas overflow (each; squared and summed over a few
+#: million points it stays finite, and above the cost of any real model).
+OVERFLOWED_RESIDUAL = 1e100
+
 def spin_to_body(longitude, latitude, period, t, phi0, vectors) -> np.ndarray:
     """Ecliptic vectors (``(n, 3)``, one per time ``t``) in the body frame of a body
     spinning about its ``z`` axis: ``R_z(-phi) R_y(beta - 90 deg) R_z(-lambda) v`` with
@@ -478,8 +482,15 @@ def fit_shape_rotation(model: ConvexModel, directions, rotation=(), *, columns=N
         return cache[key]
 
     def residuals(x):
-        raw, _, _, _, closing = evaluate(x)[:5]
-        return np.concatenate([(data_rel - compared(raw)) * weight, reg * closing])
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            raw, _, _, _, closing = evaluate(x)[:5]
+            res = np.concatenate([(data_rel - compared(raw)) * weight, reg * closing])
+        if not np.all(np.isfinite(res)):
+            # a trial step so long that exp(basis @ c) overflows (a high degree on few
+            # points): a cost above any finite one, so the optimiser rejects the step
+            # and shortens the next
+            return np.full(res.size, OVERFLOWED_RESIDUAL)
+        return res
 
     def jacobian(x):
         c, r, ph = unpack(x)
