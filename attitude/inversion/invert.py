@@ -339,7 +339,10 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     scan = None
     if p.size == 2:
         span = float(np.ptp(model.time))
-        scan = period_scan(observations, period_grid(span, *np.sort(p)), client=client)
+        # the scan's model is coarser than the fit's (convexinv's practice), never finer
+        # than the one asked
+        scan = period_scan(observations, period_grid(span, *np.sort(p)), rows=min(rows, 6),
+                           degree=min(degree, 4), client=client)
         p0 = scan.best
     elif p.size == 1:
         p0 = float(p[0])
