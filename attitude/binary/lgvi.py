@@ -331,7 +331,7 @@ def integrate_lgvi_batch(systems, y0: np.ndarray, t: np.ndarray, step: float,
     ``compensated`` (the default) each is a compensated sum (Neumaier 1974): the low part
     each addition loses is carried into the next step's, so the state's round-off grows
     with the increments, not with the state (``benchmarks/binary.py --only --long
-    10000``: |dH/H| 1.1e-14 over 4e5 steps, 5.4e-14 with plain sums).  The orbit's
+    10000``: ``|dH/H|`` 1.1e-14 over 4e5 steps, 5.4e-14 with plain sums).  The orbit's
     increment is ``h/mu (p + h/2 F)``: the rounding of ``h/mu`` scales it along
     ``p + h/2 F``, which keeps ``R x p`` (the step's change of it is ``h/2 (R x F +
     R' x F')`` whatever that factor), where ``h/mu p + h^2/(2 mu) F`` turned it by the
