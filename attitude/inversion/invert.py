@@ -25,6 +25,7 @@ from scipy.spatial.transform import Rotation
 
 from attitude.foundations.constants import OBLIQUITY_J2000
 from attitude.foundations.errors import PhotometryError
+from attitude.foundations.progress import activity, track
 from attitude.foundations.quantities import to_si
 from attitude.inversion.convex import ConvexFit, ConvexModel, fit_convex
 from attitude.inversion.gaussian_image import GaussianImage
@@ -173,7 +174,7 @@ def _scan_chunk(blocks, periods, options) -> tuple[np.ndarray, np.ndarray]:
     model = ConvexModel(blocks, GaussianImage(rows, degree))
     chi2 = np.empty(periods.size)
     ended = np.empty(periods.size)
-    for i, p in enumerate(periods):
+    for i, p in enumerate(track(periods, periods.size, "period scan", unit="periods")):
         fits = [fit_convex(model, lon, lat, p, max_iterations=max_iterations)
                 for lon, lat in pole_starts(poles)]
         best = min(fits, key=lambda f: f.chi2)
@@ -356,7 +357,8 @@ def invert(observations, rotation: str = "auto", *, period=None, poles: int = 10
     # and refined from that shape its chi2 would not be a fair comparison
     fixed = sorted((fit_convex(model, lon, lat, p0, free_period=False, convexity=convexity,
                                max_iterations=max_iterations)
-                    for lon, lat in pole_starts(poles)), key=lambda f: f.chi2)
+                    for lon, lat in track(pole_starts(poles), poles, "pole search",
+                                          unit="pole starts")), key=lambda f: f.chi2)
     own = fit_convex(model, fixed[0].longitude + np.pi, fixed[0].latitude, p0,
                      free_period=False, convexity=convexity, max_iterations=max_iterations)
     best, mirror = (fit_convex(model, start.longitude, start.latitude, p0,
@@ -547,14 +549,16 @@ def _invert_tumbling(observations, start, periods, *, rows, degree, convexity,
     if start is None:
         if periods is not None:
             periods = np.atleast_1d(to_si(periods, "s", name="period", error=PhotometryError))
-        fits = search_tumbler(model, periods, max_iterations=max_iterations)
+        with activity("tumbler search from the data alone"):
+            fits = search_tumbler(model, periods, max_iterations=max_iterations)
         best = fits[0]
         others = [(f, "{} P_phi {:.6g} h, P_psi {:.6g} h, L ({:.1f}, {:.1f}) deg".format(
             f.regime, f.periods["precession"] / 3600, f.periods["rotation"] / 3600,
             *f.pole)) for f in fits[1:]]
     else:
-        best = fit_tumbler(model, _start_parameters(start), convexity=convexity,
-                           max_iterations=max_iterations)
+        with activity("tumbler fit from the start"):
+            best = fit_tumbler(model, _start_parameters(start), convexity=convexity,
+                               max_iterations=max_iterations)
     if alternatives and start is not None:
         p0 = _start_parameters(start)
         other, mode = _other_mode(p0, best.regime)

@@ -260,3 +260,18 @@ def test_plot_writes_the_figures(scenario, capsys):
         path = scenario.parent / name
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"wrote {path}" in out
     assert not (scenario.parent / "demo_periodogram.png").exists()    # no scan ran
+
+
+def test_invert_reports_its_stages_unless_quiet(scenario, capsys, monkeypatch):
+    """The pole search reports its starts on stderr (issue 26: inversion stages), with
+    every report shown at once (the defaults wait a second); ``--quiet`` prints nothing."""
+    from attitude.foundations import progress
+
+    monkeypatch.setattr(progress, "DELAY", 0.0)
+    monkeypatch.setattr(progress, "INTERVAL", 0.0)
+    assert main(["invert", str(scenario)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert any(ln.startswith("attitude: pole search: done, 10 of 10 pole starts in ")
+               for ln in err), err
+    assert main(["invert", str(scenario), "--quiet"]) == 0
+    assert capsys.readouterr() == ("", "")
