@@ -87,6 +87,10 @@ two-body problem) and reports the mutual orbit's period, its change across an im
 the secondary's libration and regime:
 
   attitude run scenarios/binary/didymos_dart.toml --report dart.json
+
+With --plot a binary run writes its separation, libration and spins as PNG (an ensemble
+of binaries, [binary.ensemble], its outcomes), and --workers N runs a [binary.ensemble]
+on a dask LocalCluster of N workers.
 """
 
 _MAIN_HELP = """\
