@@ -343,7 +343,7 @@ TUMBLER_KINDS = {"apophis-like SAM": (0.61, 0.965, 27.38, 264.6 / 27.38, "SAM"),
 
 
 def tumbler_geometry(t):
-    """Sun and observer directions changing slowly (as tests/inversion/test_tumbler.py):
+    """Sun and observer directions changing slowly (tests/inversion/test_tumbler.py uses it too):
     the Sun 0.8 deg/day along the ecliptic, the phase angle from 25 deg growing 0.6
     deg/day, the observer's latitude from 12 deg falling 0.5 deg/day."""
     day = t / 86400.0

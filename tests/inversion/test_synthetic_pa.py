@@ -13,26 +13,15 @@ axis weakly determined, and the fit from the true pole itself misses them by ~10
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _benchmark():
-    spec = importlib.util.spec_from_file_location("inversion_benchmark",
-                                                  ROOT / "benchmarks" / "inversion.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from . import inversion_benchmark
 
 
 def test_the_synthetic_shape_is_convex_in_principal_axes():
     """The truth generator: a convex polyhedron of unit volume, moments ascending."""
-    bench = _benchmark()
+    bench = inversion_benchmark()
     shape, moments = bench.gaussian_random_sphere(np.random.default_rng(3), rows=6)
     assert shape.is_convex()
     assert abs(shape.volume - 1.0) < 1e-12
@@ -42,7 +31,7 @@ def test_the_synthetic_shape_is_convex_in_principal_axes():
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_synthetic_principal_axis_rotator_is_recovered(seed):
-    r = _benchmark().run_pa_case(seed)
+    r = inversion_benchmark().run_pa_case(seed)
     print(f"\nseed {seed}: pole {r['best_to_truth_deg']:.2f} / "
           f"{r['best_to_mirror_of_truth_deg']:.2f} deg, dP/P {r['period_rel_error']:.1e}, "
           f"ratios {r['fitted_ratios']} (truth {r['truth_ratios']}), CPU {r['cpu_s']:.0f} s")

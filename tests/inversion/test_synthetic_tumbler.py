@@ -8,9 +8,6 @@ of noise, its shape a lumpy convex body (``benchmarks/inversion.py``'s
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
 from attitude.inversion import ConvexModel, GaussianImage
@@ -19,21 +16,13 @@ from attitude.model.freebody import diagnose_many
 from attitude.model.sampling import tumbling_state
 from attitude.photometry.periods import fit_periods
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _benchmark():
-    spec = importlib.util.spec_from_file_location("inversion_benchmark",
-                                                  ROOT / "benchmarks" / "inversion.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from . import inversion_benchmark
 
 
 def test_the_synthetic_tumbler_has_the_asked_state():
     """The generator: the state has the issue's energy and the shape's moment ratios
     near the asked ones (lumps move them by a few per cent)."""
-    case = _benchmark().tumbler_case("issue SAM", 0, days=2.0)
+    case = inversion_benchmark().tumbler_case("issue SAM", 0, days=2.0)
     truth = case["truth"]
     assert truth[2] == 1.027 and case["regime"] == "SAM"
     assert abs(truth[3] - 0.55) < 0.1 and abs(truth[4] - 0.9) < 0.05
@@ -45,7 +34,7 @@ def test_the_period_pairs_of_the_data_hold_the_issue_state():
     are P_psi and 1/(1/P_phi - 1/P_psi) (not P_phi itself), and period_pairs, reading one
     of them as P_psi, offers the true (P_phi, P_psi) within the frequency resolution of
     the span (a period P is resolved to about P / T)."""
-    bench = _benchmark()
+    bench = inversion_benchmark()
     case = bench.tumbler_case("issue SAM", 0)
     model = ConvexModel(case["observations"], GaussianImage(3, 2))
     magnitudes = -2.5 * np.log10(model.data)

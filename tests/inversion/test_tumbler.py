@@ -27,25 +27,13 @@ from attitude.model.freebody import diagnose_many
 from attitude.model.sampling import tumbling_state
 from attitude.model.state import AttitudeState
 
+from . import inversion_benchmark
+
 EPOCH = Time("2029-01-01", scale="tdb")
 #: Apophis-like (Pravec et al. 2014): L toward ecliptic (250, -75) deg, E/E0 1.024,
 #: A/C 0.61, B/C 0.965, P_phi 27.38 h (then P_psi 264.6 h).
 APOPHIS = (np.radians(250.0), np.radians(-75.0), 1.024, 0.61, 0.965, 27.38 * 3600.0, 0.7,
            2.1)
-
-
-def geometry(t):
-    """Sun and observer directions changing slowly: the Sun moving 0.8 deg/day along the
-    ecliptic, the phase angle from 25 deg growing 0.6 deg/day, the observer's latitude
-    from 12 deg falling 0.5 deg/day."""
-    day = t / 86400.0
-    lon = np.radians(30.0 + 0.8 * day)
-    alpha = np.radians(25.0 + 0.6 * day)
-    lat = np.radians(12.0 - 0.5 * day)
-    sun = np.stack([np.cos(lon), np.sin(lon), np.zeros_like(t)], axis=1)
-    seen = np.stack([np.cos(lat) * np.cos(lon + alpha), np.cos(lat) * np.sin(lon + alpha),
-                     np.sin(lat)], axis=1)
-    return sun, seen
 
 
 def synthetic(truth, t, noise=0.01, seed=1):
@@ -56,7 +44,8 @@ def synthetic(truth, t, noise=0.01, seed=1):
     body = att.RigidBody.from_principal_moments(moments[0])
     state = AttitudeState(EPOCH, Rotation.from_quat(q[0]), w[0], frame="ECLIPJ2000")
     eph = att.propagate(body, state, t)
-    sun, seen = geometry(t)
+    geom = inversion_benchmark().tumbler_geometry(t)
+    sun, seen = geom.sun, geom.observer
     shape = att.Polyhedron.ellipsoid_from_moments(moments[0], subdivisions=4)
     lc = att.lightcurve(eph, shape, att.Geometry(sun=sun, observer=seen), law="ls-lambert")
     mag = (-2.5 * np.log10(np.asarray(lc.dataset["flux"]))
