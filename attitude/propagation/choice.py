@@ -53,6 +53,7 @@ import numpy as np
 from ..model.body import as_bodies
 from ..model.torques import TorqueModel
 from .compiled import NUMBA
+from .compiled_torques import callback_model
 from .kicks import System, torque_terms
 from .stepsize import STEPS_PER_PERIOD, own_rates, torque_rates
 
@@ -106,9 +107,8 @@ def _callback_only(terms) -> bool:
     """Whether one external model runs by its own ``numba_torque`` and every other has a
     compiled form: only the compiled DOP853 can call the callback
     (:func:`attitude.propagation.compiled_torques.user_torque`)."""
-    user = [m for m in terms if getattr(m, "numba_torque", None) is not None
-            and getattr(m, "internal", False) is not True]
-    return len(user) == 1 and _compiled_form_expected([m for m in terms if m is not user[0]])
+    user = callback_model(terms)
+    return user is not None and _compiled_form_expected([m for m in terms if m is not user])
 
 
 def _spans(t: np.ndarray) -> tuple[float, float]:

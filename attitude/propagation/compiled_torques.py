@@ -108,7 +108,7 @@ from .compiled import NUMBA, jit_formula
 from .compiled import jit as _jit
 
 __all__ = ["CompiledTorques", "compile_torques", "compile_torques_shared", "body_torque",
-           "NUMBA", "TERM_KINDS", "user_torque"]
+           "NUMBA", "TERM_KINDS", "user_torque", "callback_model"]
 
 #: Codes of the terms in ``kinds``.
 TERM_KINDS = {"gravity_gradient": 0, "constant_body": 1, "constant_inertial": 2,
@@ -727,6 +727,27 @@ def _no_torque(t, q, omega, out):
     out[0] = 0.0
     out[1] = 0.0
     out[2] = 0.0
+
+
+def callback_model(torques):
+    """The one model of ``torques`` that the compiled DOP853 runs by its own
+    ``numba_torque`` (:func:`user_torque`), or None: an external model (not ``internal``)
+    carrying one, when it is the only such model (with two, the Python path runs).
+
+    Examples
+    --------
+    >>> from attitude.propagation.compiled_torques import callback_model
+    >>> class Drag:
+    ...     numba_torque = staticmethod(lambda t, q, omega, out: None)
+    ...     def __call__(self, t, quaternion, omega_body, body):
+    ...         return [0.0, 0.0, 0.0]
+    >>> drag = Drag()
+    >>> callback_model([drag]) is drag, callback_model([drag, Drag()])
+    (True, None)
+    """
+    user = [m for m in torques if getattr(m, "numba_torque", None) is not None
+            and getattr(m, "internal", False) is not True]
+    return user[0] if len(user) == 1 else None
 
 
 def user_torque(model):

@@ -32,7 +32,7 @@ from ..model.body import RigidBody
 from ..model.torques import internal_rate
 from . import compiled_dop853
 from .compiled import NUMBA, each_on_cores
-from .compiled_torques import compile_torques_shared, user_torque
+from .compiled_torques import callback_model, compile_torques_shared, user_torque
 from .events import compiled_events, evaluate
 
 __all__ = ["integrate_reference", "integrate_reference_batch", "checked_rtol", "DEFAULT_RTOL",
@@ -188,10 +188,8 @@ def _compiled_forms(bodies, torques, t: np.ndarray, method: str, compiled: bool 
     span = (float(min(0.0, np.min(t, initial=0.0))), float(max(0.0, np.max(t, initial=0.0))))
     # a user's torque with its own numba function (compiled_torques.user_torque), one
     # external one at most, runs by its callback; the others by their compiled forms
-    user = [m for m in torques if getattr(m, "numba_torque", None) is not None
-            and getattr(m, "internal", False) is not True]
-    user = user if len(user) == 1 else []
-    rest = [m for m in torques if not any(m is u for u in user)]
+    user = callback_model(torques)
+    rest = [m for m in torques if m is not user]
     groups = [[m for m in rest if (getattr(m, "internal", False) is True) == internal]
               for internal in (False, True)]
     shared = compile_torques_shared(groups, bodies, t_span=span)
@@ -203,7 +201,7 @@ def _compiled_forms(bodies, torques, t: np.ndarray, method: str, compiled: bool 
                                     "compiled=None", key="compiled")
         return None
     has_internal = any(getattr(m, "internal", False) is True for m in rest)
-    callback = user_torque(user[0] if user else None)
+    callback = user_torque(user)
     return [tuple((c.kinds, c.offsets, c.params) for c in row) + (has_internal, *callback)
             for row in shared]
 
