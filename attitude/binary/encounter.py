@@ -35,7 +35,7 @@ from astropy import units as u
 from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
-from attitude.binary.ensembles import input_variables
+from attitude.binary.ensembles import input_variables, rows_on_client
 from attitude.binary.propagate import propagate_binary
 from attitude.binary.system import BinaryState, BinarySystem
 from attitude.foundations.constants import G as GRAVITATIONAL_CONSTANT
@@ -44,7 +44,6 @@ from attitude.foundations.quantities import to_si
 from attitude.model.body import MassProperties, RigidBody
 from attitude.model.freebody import diagnose_many
 from attitude.model.sampling import tumbling_state
-from attitude.propagation.cluster import resolve_client
 
 __all__ = ["hyperbola", "close_encounter", "sample_encounter", "encounter_ensemble",
            "ellipsoid_from_ratios"]
@@ -447,14 +446,8 @@ def encounter_ensemble(members, times, *, method: str | None = None,
     if client is None:
         rows = _run_chunk(members, times, run)
     else:
-        client = resolve_client(client)
-        if chunk_size is None:
-            workers = max(1, len(client.scheduler_info().get("workers", {})))
-            chunk_size = max(1, math.ceil(len(members) / (2 * workers)))
-        chunks = [members[i:i + int(chunk_size)]
-                  for i in range(0, len(members), int(chunk_size))]
-        futures = [client.submit(_run_chunk, c, times, run, pure=False) for c in chunks]
-        rows = [row for part in client.gather(futures) for row in part]
+        rows = rows_on_client(client, _run_chunk, members, (times, run),
+                              chunk_size=chunk_size, chunks_per_worker=2)
     return _dataset(rows)
 
 

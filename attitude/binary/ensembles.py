@@ -227,6 +227,22 @@ def input_variables(rows: list) -> dict:
             for key in names}
 
 
+def rows_on_client(client, run_chunk, members: list, args: tuple, *,
+                   chunk_size: int | None = None, chunks_per_worker: int = 1) -> list:
+    """``run_chunk(chunk, *args)`` (a list of rows per chunk of ``members``) as one dask
+    task per chunk on ``client`` (:func:`attitude.propagation.cluster.resolve_client`):
+    the rows of all members in order.  ``chunk_size`` default: ``chunks_per_worker``
+    chunks for each of the client's workers."""
+    client = resolve_client(client)
+    if chunk_size is None:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        chunk_size = max(1, math.ceil(len(members) / (chunks_per_worker * workers)))
+    size = int(chunk_size)
+    futures = [client.submit(run_chunk, members[i:i + size], *args, pure=False)
+               for i in range(0, len(members), size)]
+    return [row for part in client.gather(futures) for row in part]
+
+
 def ensemble(members, times, *, method: str | None = None, rtol: float | None = None,
              step=None, chaos: bool = False, client=None, chunk_size: int | None = None
              ) -> xr.Dataset:
@@ -285,14 +301,8 @@ def ensemble(members, times, *, method: str | None = None, rtol: float | None = 
     if client is None:
         rows = _run_chunk(members, times, options)
     else:
-        client = resolve_client(client)
-        if chunk_size is None:
-            workers = max(1, len(client.scheduler_info().get("workers", {})))
-            chunk_size = max(1, math.ceil(len(members) / workers))
-        chunks = [members[i:i + int(chunk_size)]
-                  for i in range(0, len(members), int(chunk_size))]
-        futures = [client.submit(_run_chunk, c, times, options, pure=False) for c in chunks]
-        rows = [row for part in client.gather(futures) for row in part]
+        rows = rows_on_client(client, _run_chunk, members, (times, options),
+                              chunk_size=chunk_size)
     return _dataset(rows, chaos)
 
 
